@@ -1,0 +1,29 @@
+"""Shared test setup: the benchmark configuration and MPI-aware skipping."""
+
+import pytest
+
+from tapecoil.config import load_config
+
+
+def _world_size() -> int:
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        return 1
+    return MPI.COMM_WORLD.size
+
+
+def pytest_collection_modifyitems(config, items):
+    # Tests marked mpi compare ranks; alone on one rank they would prove nothing.
+    if _world_size() > 1:
+        return
+    skip = pytest.mark.skip(reason="mpi test: run under mpirun -n 2 (make test does)")
+    for item in items:
+        if "mpi" in item.keywords:
+            item.add_marker(skip)
+
+
+@pytest.fixture
+def cfg():
+    """The benchmark tape of the physics brief (the configuration defaults)."""
+    return load_config()

@@ -1,0 +1,79 @@
+"""The compatibility layer on the installed DOLFINx (serial and under mpirun -n 2)."""
+
+import numpy as np
+import pytest
+
+from tapecoil import compat
+
+
+def _rectangle_mesh(comm, lx=2.0, ly=0.5):
+    import gmsh
+
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        if comm.rank == 0:
+            gmsh.model.add("rect")
+            surf = gmsh.model.occ.addRectangle(0, 0, 0, lx, ly)
+            gmsh.model.occ.synchronize()
+            gmsh.model.addPhysicalGroup(2, [surf], tag=1)
+            left = [
+                c
+                for _, c in gmsh.model.getBoundary([(2, surf)], oriented=False)
+                if abs(gmsh.model.occ.getCenterOfMass(1, c)[0]) < 1e-12
+            ]
+            gmsh.model.addPhysicalGroup(1, left, tag=7)
+            gmsh.option.setNumber("Mesh.CharacteristicLengthMax", 0.1)
+            gmsh.model.mesh.generate(2)
+        return compat.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+    finally:
+        gmsh.finalize()
+
+
+def _check_rectangle(comm):
+    import dolfinx
+    import ufl
+    from mpi4py import MPI
+
+    mesh, cell_tags, facet_tags = _rectangle_mesh(comm)
+    area = comm.allreduce(
+        dolfinx.fem.assemble_scalar(dolfinx.fem.form(1.0 * ufl.dx(domain=mesh))), op=MPI.SUM
+    )
+    assert area == pytest.approx(1.0, rel=1e-12)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    left = comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(1.0 * ds(7))), op=MPI.SUM)
+    assert left == pytest.approx(0.5, rel=1e-12)
+    assert comm.allreduce(cell_tags.values.size, op=MPI.SUM) == mesh.topology.index_map(2).size_global
+    return mesh
+
+
+def test_version_supported():
+    assert compat.DOLFINX_VERSION >= (0, 9)
+
+
+def test_gmsh_model_to_mesh_serial():
+    from mpi4py import MPI
+
+    _check_rectangle(MPI.COMM_SELF)
+
+
+def test_interpolation_points_and_vector():
+    import dolfinx
+    from mpi4py import MPI
+
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_SELF, 2, 2)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 2))
+    pts = compat.interpolation_points(V)
+    assert pts.shape == (6, 2)
+    b = compat.create_vector(V)
+    assert b.getSize() == V.dofmap.index_map.size_global
+    b.destroy()
+
+
+@pytest.mark.mpi
+def test_gmsh_model_to_mesh_distributed():
+    from mpi4py import MPI
+
+    mesh = _check_rectangle(MPI.COMM_WORLD)
+    assert mesh.topology.index_map(2).size_local > 0  # rank 0 built it, every rank got a share
+    assert np.all(np.isfinite(mesh.geometry.x))
