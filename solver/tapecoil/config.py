@@ -1,0 +1,394 @@
+"""Run parameters: typed dataclasses in SI units, loaded from TOML and checked before any work.
+
+The defaults are the benchmark tape of the physics brief (thesis Table 3.1, annealed BeCu) and
+its loading (Table 3.2). Every field carries its unit and its allowed range in the field
+metadata; :func:`load_config` refuses an unknown key, a wrong type or an out-of-range value
+with a :class:`ConfigError` that names the key (``tape.h``) and what is allowed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, get_type_hints
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10 (conda environments)
+    import tomli as tomllib
+
+
+class ConfigError(ValueError):
+    """A configuration value that cannot be used; the message names the key and the range."""
+
+
+@dataclass(frozen=True)
+class Range:
+    """Allowed interval of a numeric parameter; open or closed at each end."""
+
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+
+    def contains(self, x: float) -> bool:
+        above = x > self.lo if self.lo_open else x >= self.lo
+        below = x < self.hi if self.hi_open else x <= self.hi
+        return above and below
+
+    def describe(self) -> str:
+        if self.hi == math.inf:
+            return f"{'>' if self.lo_open else '>='} {self.lo:g}"
+        if self.lo == -math.inf:
+            return f"{'<' if self.hi_open else '<='} {self.hi:g}"
+        return f"in {'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}{')' if self.hi_open else ']'}"
+
+
+POSITIVE = Range(0.0, lo_open=True)
+NON_NEGATIVE = Range(0.0)
+
+
+def param(default: Any, unit: str = "", allowed: Range | tuple[str, ...] | None = None, **kw):
+    """A dataclass field with its unit and allowed values recorded for validation and docs."""
+    if isinstance(default, (dict, list)):
+        return field(
+            default_factory=lambda: type(default)(default), metadata={"unit": unit, "allowed": allowed}, **kw
+        )
+    return field(default=default, metadata={"unit": unit, "allowed": allowed}, **kw)
+
+
+@dataclass
+class TapeConfig:
+    """The tape spring: geometry of the curved strip and its material.
+
+    Attributes:
+        R: transverse radius of the cross-section arc [m].
+        alpha: angle subtended by the cross-section arc [rad], in (0, 2 pi).
+        h: wall thickness [m]; must be much smaller than R (h/R <= 0.05) for shell theory.
+        L: length of the tape [m].
+        E: Young's modulus [Pa].
+        nu: Poisson's ratio [-], in (-1, 0.5).
+        rho_l: mass per unit length [kg/m].
+    """
+
+    R: float = param(0.0151, "m", POSITIVE)
+    alpha: float = param(2.3562, "rad", Range(0.0, 2 * math.pi, True, True))
+    h: float = param(1.0e-4, "m", POSITIVE)
+    L: float = param(0.5, "m", POSITIVE)
+    E: float = param(130e9, "Pa", POSITIVE)
+    nu: float = param(0.3, "-", Range(-1.0, 0.5, True, True))
+    rho_l: float = param(0.0293, "kg/m", POSITIVE)
+
+    @property
+    def b(self) -> float:
+        """Arc width R alpha [m]."""
+        return self.R * self.alpha
+
+    @property
+    def projected_width(self) -> float:
+        """Chord of the cross-section, 2 R sin(alpha/2) [m]."""
+        return 2 * self.R * math.sin(self.alpha / 2)
+
+    @property
+    def D(self) -> float:
+        """Flexural rigidity E h^3 / (12 (1 - nu^2)) [N m]."""
+        return self.E * self.h**3 / (12 * (1 - self.nu**2))
+
+    @property
+    def mu(self) -> float:
+        """Strain energy per unit area of the opposite-sense coil of radius R, D (1 + nu) / R^2 [J/m^2]."""
+        return self.D * (1 + self.nu) / self.R**2
+
+    @property
+    def density(self) -> float:
+        """Volume density rho_l / (b h) [kg/m^3]."""
+        return self.rho_l / (self.b * self.h)
+
+    def check(self) -> None:
+        if self.h / self.R > 0.05:
+            raise ConfigError(
+                f"tape.h = {self.h:g} m is not much smaller than tape.R = {self.R:g} m: "
+                f"thin-shell theory needs h/R <= 0.05 (got {self.h / self.R:.3g})"
+            )
+        if self.h / self.b > 0.05:
+            raise ConfigError(
+                f"tape.h = {self.h:g} m is not much smaller than the arc width R*alpha = {self.b:g} m "
+                f"(h/b must be <= 0.05)"
+            )
+        if self.L < self.b:
+            raise ConfigError(f"tape.L = {self.L:g} m must be at least the arc width R*alpha = {self.b:g} m")
+
+
+@dataclass
+class HubConfig:
+    """The rigid hub, a cylinder whose axis is parallel to the tape width, tangent to the root.
+
+    Attributes:
+        radius: hub radius r_hub (r_c in the thesis) [m].
+    """
+
+    radius: float = param(0.0127, "m", POSITIVE)
+
+
+@dataclass
+class CoilingConfig:
+    """Quasi-static coiling: hub rotation with a pull at the free end.
+
+    Attributes:
+        hub_angle: total hub rotation to the stowed state [rad].
+        tension: pull T at the free end, along the tangent guide line [N].
+        flatten_steps: load steps used to flatten the root onto the hub before rotating [-].
+    """
+
+    hub_angle: float = param(36.0, "rad", POSITIVE)
+    tension: float = param(1.0, "N", NON_NEGATIVE)
+    flatten_steps: int = param(4, "-", Range(1, 1000))
+
+
+@dataclass
+class MeshConfig:
+    """Structured mesh of the strip.
+
+    Attributes:
+        preset: 'coarse' (CI), 'default' (about 4 mm elements, 9 across) or 'fine'; the fields
+            below override the preset when given (> 0).
+        elements_across: elements across the arc width [-] (0: from the preset).
+        element_size: target element length along the tape [m] (0: from the preset).
+        grading: ratio of the longest to the shortest element along the length (1: uniform) [-].
+    """
+
+    preset: str = param("default", "", ("coarse", "default", "fine"))
+    elements_across: int = param(0, "-", Range(0, 200))
+    element_size: float = param(0.0, "m", NON_NEGATIVE)
+    grading: float = param(1.0, "-", Range(1.0, 100.0))
+
+
+@dataclass
+class SolverConfig:
+    """Newton solver and adaptive load stepping.
+
+    Attributes:
+        rtol: relative residual tolerance of Newton [-].
+        atol: absolute residual tolerance of Newton [residual units].
+        max_newton: Newton iterations before a step counts as failed [-].
+        initial_step: first load step as a fraction of the full load [-].
+        min_step: smallest load step before giving up [-].
+        max_step: largest load step [-].
+        grow: factor by which the step grows after an easy step [-].
+        cutback: factor by which the step shrinks after a failed step [-].
+        max_cutbacks: consecutive cut-backs before the run stops [-].
+        petsc_options: extra PETSc options (prefix-free), e.g. {"pc_factor_mat_solver_type" = "mumps"}.
+    """
+
+    rtol: float = param(1e-8, "-", Range(0.0, 1.0, True, True))
+    atol: float = param(1e-10, "", POSITIVE)
+    max_newton: int = param(25, "-", Range(1, 1000))
+    initial_step: float = param(0.05, "-", Range(0.0, 1.0, True))
+    min_step: float = param(1e-6, "-", Range(0.0, 1.0, True))
+    max_step: float = param(0.25, "-", Range(0.0, 1.0, True))
+    grow: float = param(1.5, "-", Range(1.0, 10.0))
+    cutback: float = param(0.5, "-", Range(0.0, 1.0, True, True))
+    max_cutbacks: int = param(8, "-", Range(1, 100))
+    petsc_options: dict = param({}, "")
+
+    def check(self) -> None:
+        if not self.min_step <= self.initial_step <= self.max_step:
+            raise ConfigError(
+                "solver.min_step <= solver.initial_step <= solver.max_step is required "
+                f"(got {self.min_step:g}, {self.initial_step:g}, {self.max_step:g})"
+            )
+
+
+@dataclass
+class ContactConfig:
+    """Penalty contact with the hub and between turns.
+
+    Attributes:
+        penalty: penalty stiffness per unit area [N/m^3]; 0 derives it from the shell stiffness
+            and the mesh size (see the contact module).
+        penalty_scale: factor on the derived penalty [-].
+    """
+
+    penalty: float = param(0.0, "N/m^3", NON_NEGATIVE)
+    penalty_scale: float = param(1.0, "-", POSITIVE)
+
+
+@dataclass
+class DeploymentConfig:
+    """Implicit dynamic deployment from the stowed state.
+
+    Attributes:
+        t_end: simulated time [s].
+        dt: initial time step [s].
+        rho_inf: high-frequency spectral radius of generalized-alpha [-]; 1 is trapezoidal Newmark.
+        lambda_end: deployed fraction at which the run stops early [-].
+    """
+
+    t_end: float = param(0.6, "s", POSITIVE)
+    dt: float = param(1e-3, "s", POSITIVE)
+    rho_inf: float = param(0.9, "-", Range(0.0, 1.0))
+    lambda_end: float = param(1.0, "-", Range(0.0, 1.0, True))
+
+    def check(self) -> None:
+        if self.dt >= self.t_end:
+            raise ConfigError(
+                f"deployment.dt = {self.dt:g} s must be smaller than deployment.t_end = {self.t_end:g} s"
+            )
+
+
+@dataclass
+class OutputConfig:
+    """Where and how often results are written.
+
+    Attributes:
+        directory: results directory (created) [path].
+        vtx_every: write a VTX snapshot every this many steps [-].
+        checkpoint: write the stowed-state checkpoint [-].
+    """
+
+    directory: str = param("results", "")
+    vtx_every: int = param(10, "-", Range(1, 10**6))
+    checkpoint: bool = param(True, "")
+
+
+@dataclass
+class Config:
+    """All parameters of a run, one section per TOML table."""
+
+    tape: TapeConfig = field(default_factory=TapeConfig)
+    hub: HubConfig = field(default_factory=HubConfig)
+    coiling: CoilingConfig = field(default_factory=CoilingConfig)
+    mesh: MeshConfig = field(default_factory=MeshConfig)
+    solver: SolverConfig = field(default_factory=SolverConfig)
+    contact: ContactConfig = field(default_factory=ContactConfig)
+    deployment: DeploymentConfig = field(default_factory=DeploymentConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
+
+    def check(self) -> None:
+        """Validate every section and the relations between sections."""
+        for f in dataclasses.fields(self):
+            _check_section(f.name, getattr(self, f.name))
+        if self.hub.radius <= 2 * self.tape.h:
+            raise ConfigError(
+                f"hub.radius = {self.hub.radius:g} m must exceed twice tape.h = {self.tape.h:g} m"
+            )
+
+
+def _type_name(tp: Any) -> str:
+    return {
+        float: "a number",
+        int: "an integer",
+        bool: "true or false",
+        str: "a string",
+        dict: "a table",
+    }.get(tp, str(tp))
+
+
+def _coerce(key: str, tp: Any, value: Any) -> Any:
+    """Check a TOML value against the field type; ints are accepted where floats are."""
+    ok = (
+        (tp is float and isinstance(value, (int, float)) and not isinstance(value, bool))
+        or (tp is int and isinstance(value, int) and not isinstance(value, bool))
+        or (tp is bool and isinstance(value, bool))
+        or (tp is str and isinstance(value, str))
+        or (tp is dict and isinstance(value, dict))
+    )
+    if not ok:
+        raise ConfigError(f"{key} must be {_type_name(tp)} (got {type(value).__name__} {value!r})")
+    if tp is float:
+        value = float(value)
+        if not math.isfinite(value):
+            raise ConfigError(f"{key} must be a finite number (got {value!r})")
+    if tp is dict:
+        for k, v in value.items():
+            if not isinstance(v, (str, int, float, bool)):
+                raise ConfigError(f"{key}.{k} must be a string, number or boolean (got {type(v).__name__})")
+    return value
+
+
+def _check_section(name: str, section: Any) -> None:
+    hints = get_type_hints(type(section))
+    for f in dataclasses.fields(section):
+        key = f"{name}.{f.name}"
+        value = _coerce(key, hints[f.name], getattr(section, f.name))
+        allowed, unit = f.metadata.get("allowed"), f.metadata.get("unit", "")
+        if isinstance(allowed, Range) and not allowed.contains(value):
+            raise ConfigError(
+                f"{key} = {value!r} is out of range: must be {allowed.describe()}{f' [{unit}]' * bool(unit)}"
+            )
+        if isinstance(allowed, tuple) and value not in allowed:
+            raise ConfigError(
+                f"{key} = {value!r} is not allowed: must be one of {', '.join(map(repr, allowed))}"
+            )
+    if hasattr(section, "check"):
+        section.check()
+
+
+def config_from_dict(data: dict[str, Any]) -> Config:
+    """Build and validate a :class:`Config` from a nested mapping (parsed TOML)."""
+    sections = {f.name: f for f in dataclasses.fields(Config)}
+    kwargs = {}
+    for name, table in data.items():
+        if name not in sections:
+            raise ConfigError(f"unknown section [{name}] (known: {', '.join(sections)})")
+        if not isinstance(table, dict):
+            raise ConfigError(f"[{name}] must be a table of keys")
+        cls = sections[name].default_factory
+        hints = get_type_hints(cls)
+        known = {f.name for f in dataclasses.fields(cls)}
+        for key, value in table.items():
+            if key not in known:
+                raise ConfigError(f"unknown key {name}.{key} (known in [{name}]: {', '.join(sorted(known))})")
+            table[key] = _coerce(f"{name}.{key}", hints[key], value)
+        kwargs[name] = cls(**table)
+    config = Config(**kwargs)
+    config.check()
+    return config
+
+
+def load_config(path: str | Path | None = None) -> Config:
+    """Read a TOML file (or the defaults when ``path`` is None) and validate it."""
+    if path is None:
+        config = Config()
+        config.check()
+        return config
+    path = Path(path)
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except FileNotFoundError:
+        raise ConfigError(f"configuration file not found: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path} is not valid TOML: {exc}") from None
+    return config_from_dict(data)
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return str(v)
+
+
+def to_toml(config: Config) -> str:
+    """The configuration as TOML, with units as comments; ``load_config`` reads it back."""
+    lines = []
+    for sec in dataclasses.fields(config):
+        section = getattr(config, sec.name)
+        lines.append(f"[{sec.name}]")
+        for f in dataclasses.fields(section):
+            v = getattr(section, f.name)
+            if isinstance(v, dict):
+                inner = ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items())
+                lines.append(f"{f.name} = {{{inner}}}")
+                continue
+            unit = f.metadata.get("unit", "")
+            lines.append(f"{f.name} = {_toml_value(v)}" + (f"  # [{unit}]" if unit and unit != "-" else ""))
+        lines.append("")
+    return "\n".join(lines)

@@ -1,0 +1,74 @@
+"""Configuration: defaults, TOML round trip, and one clear error per kind of bad input."""
+
+import math
+
+import pytest
+
+from tapecoil.config import Config, ConfigError, config_from_dict, load_config, to_toml
+
+
+def test_defaults_are_the_benchmark_tape():
+    c = load_config()
+    assert (c.tape.R, c.tape.alpha, c.tape.h, c.tape.L) == (0.0151, 2.3562, 1e-4, 0.5)
+    assert (c.tape.E, c.tape.nu, c.tape.rho_l) == (130e9, 0.3, 0.0293)
+    assert c.hub.radius == 0.0127
+    assert (c.coiling.hub_angle, c.coiling.tension) == (36.0, 1.0)
+
+
+def test_toml_round_trip(tmp_path):
+    c = Config()
+    c.tape.L = 0.25
+    c.mesh.preset = "coarse"
+    c.solver.petsc_options = {"pc_factor_mat_solver_type": "mumps", "snes_monitor": True}
+    path = tmp_path / "c.toml"
+    path.write_text(to_toml(c))
+    assert load_config(path) == c
+
+
+def test_integer_accepted_for_float(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text("[coiling]\nhub_angle = 12\n")
+    c = load_config(path)
+    assert c.coiling.hub_angle == 12.0 and isinstance(c.coiling.hub_angle, float)
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        ({"tape": {"h": 0.0}}, r"tape\.h = 0\.0 is out of range: must be > 0 \[m\]"),
+        ({"tape": {"h": -1e-4}}, r"tape\.h .* must be > 0"),
+        ({"tape": {"alpha": 0.0}}, r"tape\.alpha .* must be in \(0, 6\.28319\)"),
+        ({"tape": {"alpha": 2 * math.pi}}, r"tape\.alpha .* must be in \(0, 6\.28319\)"),
+        ({"tape": {"nu": 0.5}}, r"tape\.nu .* must be in \(-1, 0\.5\)"),
+        ({"tape": {"nu": -1.0}}, r"tape\.nu .* must be in \(-1, 0\.5\)"),
+        ({"hub": {"radius": 0.0}}, r"hub\.radius = 0\.0 is out of range: must be > 0"),
+        ({"hub": {"radius": -0.01}}, r"hub\.radius .* must be > 0"),
+        ({"tape": {"h": 1e-3}}, r"tape\.h = 0\.001 m is not much smaller than tape\.R .* h/R <= 0\.05"),
+        ({"tape": {"L": 0.01}}, r"tape\.L .* at least the arc width"),
+        ({"tape": {"E": "130e9"}}, r"tape\.E must be a number \(got str"),
+        ({"tape": {"E": True}}, r"tape\.E must be a number \(got bool"),
+        ({"tape": {"E": math.inf}}, r"tape\.E must be a finite number"),
+        ({"tape": {"thickness": 1e-4}}, r"unknown key tape\.thickness \(known in \[tape\]: E, L, R"),
+        ({"tapes": {}}, r"unknown section \[tapes\]"),
+        ({"mesh": {"preset": "medium"}}, r"mesh\.preset = 'medium' is not allowed: must be one of 'coarse'"),
+        ({"mesh": {"elements_across": 2.5}}, r"mesh\.elements_across must be an integer"),
+        ({"deployment": {"rho_inf": 1.5}}, r"deployment\.rho_inf .* must be in \[0, 1\]"),
+        ({"deployment": {"dt": 1.0, "t_end": 0.5}}, r"deployment\.dt .* smaller than deployment\.t_end"),
+        ({"solver": {"initial_step": 0.5, "max_step": 0.25}}, r"solver\.min_step <= solver\.initial_step"),
+        ({"solver": {"petsc_options": {"ksp_type": [1]}}}, r"solver\.petsc_options\.ksp_type must be"),
+        ({"hub": {"radius": 1e-4}}, r"hub\.radius .* must exceed twice tape\.h"),
+        ({"coiling": {"tension": -1.0}}, r"coiling\.tension .* must be >= 0 \[N\]"),
+    ],
+)
+def test_bad_values_are_refused_with_key_and_range(data, message):
+    with pytest.raises(ConfigError, match=message):
+        config_from_dict(data)
+
+
+def test_file_errors(tmp_path):
+    with pytest.raises(ConfigError, match="not found"):
+        load_config(tmp_path / "missing.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[tape\nh = 1")
+    with pytest.raises(ConfigError, match="not valid TOML"):
+        load_config(bad)
