@@ -1,0 +1,193 @@
+"""tapecoil.theory against every number of the physics brief, and closed forms against the ODE."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from tapecoil import theory as th
+
+REL = 5e-3  # the brief's numbers are rounded to 3-4 digits: 0.5 %
+
+
+def close(value, reference, rel=REL):
+    return value == pytest.approx(reference, rel=rel)
+
+
+def k_of(cfg, r):
+    tp = cfg.tape
+    return th.seffen_rate(tp.mu, r, tp.R, tp.alpha, tp.rho_l, tp.L)
+
+
+def k_growing(cfg):
+    tp = cfg.tape
+
+    def k(lam):
+        return k_of(cfg, th.coil_radius_during_deployment(lam, cfg.hub.radius, tp.h, tp.L))
+
+    return k
+
+
+def test_table_3_1_derived_quantities(cfg):
+    tp = cfg.tape
+    assert close(tp.b, 0.035579)
+    assert close(tp.D, 0.011905)
+    assert close(th.flexural_rigidity(tp.E, tp.h, tp.nu), 0.011905)
+    assert close(tp.mu, 67.875)
+    assert close(th.opposite_sense_energy_density(tp.D, tp.nu, tp.R), 67.875)
+    assert close(tp.density, 8235)
+    assert close(cfg.hub.radius / tp.R, 0.841)
+    assert th.coiling_regime(cfg.hub.radius, tp.R) == "bending"
+
+
+def test_coil_geometry_section_2(cfg):
+    tp, r_hub = cfg.tape, cfg.hub.radius
+    r = th.outer_radius_after_rotation(36.0, r_hub, tp.h)
+    assert close(r, 13.27e-3)
+    assert close(th.coiled_length_from_rotation(36.0, r_hub, tp.h), 0.469)
+    # turn n's mid-surface: r_hub + h/2 + n h
+    assert th.turn_radius(3, r_hub, tp.h) == pytest.approx(r_hub + 3.5 * tp.h, rel=1e-14)
+    # Eq. 4.3 and its inverse
+    x = th.coiled_length_from_radius(r, r_hub, tp.h)
+    assert th.radius_from_coiled_length(x, r_hub, tp.h) == pytest.approx(r, rel=1e-12)
+    # the spiral length is the arc length of the mid-surface spiral
+    spiral, _ = quad(lambda phi: r_hub + tp.h / 2 + tp.h * phi / (2 * math.pi), 0, 36.0)
+    assert th.coiled_length_from_rotation(36.0, r_hub, tp.h) == pytest.approx(spiral, rel=1e-12)
+    assert th.rotation_for_coiled_length(spiral, r_hub, tp.h) == pytest.approx(36.0, rel=1e-12)
+
+
+def test_stored_energy_section_3(cfg):
+    tp, r_hub = cfg.tape, cfg.hub.radius
+    assert th.energy_density(tp.R, tp.R, tp.D, tp.nu) == pytest.approx(tp.mu, rel=1e-12)
+    # "for rho between 12.7 and 13.3 mm, w is about 79 to 82 J/m^2" (the span is rounded)
+    w = th.energy_density(np.array([12.7e-3, 13.3e-3]), tp.R, tp.D, tp.nu)
+    assert 77 < w[1] < w[0] < 82
+    U = th.stored_energy(36.0, r_hub, tp.h, tp.R, tp.alpha, tp.D, tp.nu)
+    assert close(U, 1.32)
+
+    # closed form against quadrature of w(rho) over the spiral
+    def integrand(phi):
+        rho = r_hub + tp.h / 2 + tp.h * phi / (2 * math.pi)
+        return th.energy_density(rho, tp.R, tp.D, tp.nu) * rho * tp.b
+
+    numeric, _ = quad(integrand, 0, 36.0, epsabs=0, epsrel=1e-13)
+    assert U == pytest.approx(numeric, rel=1e-10)
+    # the thesis's accidental agreement: mu R^2 alpha Theta = 1.31 J
+    assert close(tp.mu * tp.R**2 * tp.alpha * 36.0, 1.31)
+
+
+def test_surface_stresses_section_4(cfg):
+    tp = cfg.tape
+    sx, sy = th.coil_stresses(12.7e-3, tp.R, tp.E, tp.nu, tp.h / 2)
+    assert close(sx, 704e6)
+    assert close(sy, 641e6)
+    sxi, syi = th.coil_stresses(12.7e-3, tp.R, tp.E, tp.nu, -tp.h / 2)
+    assert (sxi, syi) == (pytest.approx(-sx), pytest.approx(-sy))
+
+
+def test_coiling_tension_section_5(cfg):
+    tp, r_c = cfg.tape, cfg.hub.radius
+    T = th.coiling_tension_bending(tp.D, tp.alpha, tp.R, r_c)
+    assert close(T, 0.384)
+    # both printed forms of Eq. 2.6 agree
+    assert T == pytest.approx(tp.D * tp.b / 2 * (1 / r_c**2 - 1 / tp.R**2), rel=1e-12)
+    assert th.coiling_tension_bending(tp.D, tp.alpha, tp.R, tp.R) == pytest.approx(0.0, abs=1e-15)
+    assert th.coiling_regime(2 * tp.R, tp.R) == "non-unique"
+    assert th.coiling_regime(4 * tp.R, tp.R) == "tension"
+    # Eq. 2.9 is linear in r_c / R
+    t1 = th.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, 4 * tp.R)
+    t2 = th.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, 8 * tp.R)
+    assert t2 == pytest.approx(2 * t1, rel=1e-12)
+    # Eq. 4.5 at lambda = 1 (empty coil) is Eq. 2.6 on the hub; the tension regime uses Eq. 2.9
+    grow = th.coiling_tension_growing(np.array([1.0, 0.0]), tp.D, tp.alpha, tp.R, r_c, tp.h, tp.L)
+    assert grow["bending"][0] == pytest.approx(T, rel=1e-12)
+    assert grow["bending"][1] < T
+    assert grow["tension"][0] == pytest.approx(
+        th.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, r_c), rel=1e-12
+    )
+
+
+@pytest.mark.parametrize(
+    ("radius", "T_ref", "t90_ref"),
+    [("hub", 0.4426, 0.3585), ("coil", 0.4236, 0.3431)],
+)
+def test_deployment_eq_2_23(cfg, radius, T_ref, t90_ref):
+    r = cfg.hub.radius if radius == "hub" else 13.27e-3
+    k = k_of(cfg, r)
+    assert close(th.deployment_time(k), T_ref)
+    assert close(th.deployment_time(k, 0.9), t90_ref)
+
+
+def test_deployment_modified_ode_table(cfg):
+    sol = th.solve_deployment_ode(k_growing(cfg), 0.0)
+    assert close(sol.t100, 0.436)
+    assert close(sol.t90, 0.352)
+    sol = th.solve_deployment_ode(k_growing(cfg), 0.04)
+    assert close(sol.t100, 0.455)
+    assert close(sol.t90, 0.369)
+    k = k_of(cfg, cfg.hub.radius)
+    assert close(th.deployment_time_lambda0(k, 0.04), 0.462)
+
+
+def test_closed_forms_against_ode(cfg):
+    k = k_of(cfg, cfg.hub.radius)
+    sol = th.solve_deployment_ode(lambda lam: k, 0.0)
+    assert sol.t100 == pytest.approx(th.deployment_time(k), rel=1e-6)
+    t = np.linspace(0.01, 0.99 * sol.t100, 25)
+    assert np.allclose(sol(t), th.deployed_fraction(t, k), rtol=1e-6, atol=0)
+    for lam0 in (0.04, 0.2, 0.6):
+        sol = th.solve_deployment_ode(lambda lam: k, lam0)
+        for lam in (lam0 + 1e-3, 0.5 * (lam0 + 1), 0.9, 1.0):
+            if lam < lam0:
+                continue
+            assert sol.time_to(lam) == pytest.approx(th.deployment_time_lambda0(k, lam0, lam), rel=1e-6)
+
+
+def test_modified_ode_satisfies_equation(cfg):
+    """The returned lambda(t) obeys lambda' = k(lambda) sqrt((lambda - lambda0) / lambda^3)."""
+    k = k_growing(cfg)
+    lam0 = 0.04
+    sol = th.solve_deployment_ode(k, lam0, samples=20001)
+    i = slice(100, -100, 50)
+    dlam_dt = np.gradient(sol.lam, sol.t)[i]
+    lam = sol.lam[i]
+    rhs = np.array([k(x) for x in lam]) * np.sqrt((lam - lam0) / lam**3)
+    assert np.allclose(dlam_dt, rhs, rtol=1e-5)
+    # the deployment is faster when the coil is bigger: Eq. 4.4 lies between the two radii
+    assert th.deployment_time(k_of(cfg, 13.27e-3)) < th.solve_deployment_ode(k, 0.0).t100
+    assert th.solve_deployment_ode(k, 0.0).t100 < th.deployment_time(k_of(cfg, cfg.hub.radius))
+
+
+def test_deployment_ode_rejects_bad_lambda0():
+    with pytest.raises(ValueError, match="lam0"):
+        th.solve_deployment_ode(lambda lam: 1.0, 1.0)
+
+
+def test_ploy_length_section_7(cfg):
+    tp = cfg.tape
+    assert close(th.ploy_length(tp.b, tp.R, tp.h), 0.123)
+    assert close(tp.projected_width, 0.0279)
+    assert close(th.ploy_length(tp.projected_width, tp.R, tp.h), 0.076, rel=0.01)  # brief: "76 mm"
+
+
+def test_fold_moment_and_section(cfg):
+    tp = cfg.tape
+    assert close(th.fold_moment(tp.D, tp.nu, tp.alpha), 36.5e-3)
+    # the thin-arc second moment against direct integration over the arc (centroidal axis)
+    beta = tp.alpha / 2
+    ybar = quad(lambda t: tp.R * math.cos(t), -beta, beta)[0] / tp.alpha
+    I_num = quad(lambda t: (tp.R * math.cos(t) - ybar) ** 2 * tp.R * tp.h, -beta, beta)[0]
+    I_num += tp.b * tp.h**3 / 12
+    assert th.arc_second_moment(tp.R, tp.alpha, tp.h) == pytest.approx(I_num, rel=1e-9)
+
+
+def test_predictions_cover_the_issue_numbers(cfg):
+    p = {x.key: x for x in th.predictions(cfg)}
+    assert close(p["T_deploy_hub"].value, 0.443)
+    assert close(p["T_deploy_ode"].value, 0.436)
+    assert close(p["t90_ode"].value, 0.352)
+    assert close(p["coiling_tension"].value, 0.384)
+    assert close(p["coil_radius"].value, 13.27e-3)
+    assert close(p["stored_energy"].value, 1.32)
+    assert all(math.isfinite(x.value) for x in p.values())
