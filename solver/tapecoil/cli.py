@@ -1,0 +1,109 @@
+"""Command line: ``tapecoil theory [config.toml] [--json]`` and the simulation commands.
+
+Configuration errors are reported as one line naming the key and the allowed range, with
+exit status 2, before anything is computed. Output is printed by MPI rank 0 only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from . import __version__
+from .config import ConfigError, load_config
+
+
+def _rank() -> int:
+    try:
+        from mpi4py import MPI
+    except ImportError:  # the theory report does not need MPI
+        return 0
+    return MPI.COMM_WORLD.rank
+
+
+def _echo(text: str = "") -> None:
+    if _rank() == 0:
+        print(text, flush=True)
+
+
+# Display units for the table: (SI unit, key) -> (factor, shown unit)
+_DISPLAY = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "N m": (1e3, "N mm"), "m^4": (1e12, "mm^4")}
+
+
+def _display(value: float, unit: str) -> tuple[str, str]:
+    factor, shown = _DISPLAY.get(unit, (1.0, unit))
+    v = value * factor
+    text = f"{v:.4g}" if abs(v) < 1e5 else f"{v:.4e}"
+    return text, shown
+
+
+def cmd_theory(args: argparse.Namespace) -> int:
+    from .theory import predictions
+
+    config = load_config(args.config)
+    preds = predictions(config)
+    if args.json:
+        payload = {
+            "config": args.config or "defaults (benchmark tape)",
+            "predictions": {
+                p.key: {"label": p.label, "value": p.value, "unit": p.unit, "source": p.source} for p in preds
+            },
+        }
+        _echo(json.dumps(payload, indent=2))
+        return 0
+    tp = config.tape
+    _echo(f"tapecoil {__version__}: analytic predictions ({args.config or 'benchmark tape, defaults'})")
+    _echo(
+        f"tape R = {tp.R * 1e3:g} mm, alpha = {math.degrees(tp.alpha):.4g} deg, h = {tp.h * 1e3:g} mm, "
+        f"L = {tp.L:g} m, E = {tp.E / 1e9:g} GPa, nu = {tp.nu:g}, rho_l = {tp.rho_l:g} kg/m; "
+        f"hub r = {config.hub.radius * 1e3:g} mm; hub rotation {config.coiling.hub_angle:g} rad"
+    )
+    rows = [(p.label, *_display(p.value, p.unit), p.source) for p in preds]
+    w0 = max(len(r[0]) for r in rows)
+    w1 = max(len(r[1]) for r in rows)
+    w2 = max(len(r[2]) for r in rows)
+    _echo()
+    for label, value, unit, source in rows:
+        _echo(f"  {label:<{w0}}  {value:>{w1}} {unit:<{w2}}  {source}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="tapecoil", description="Coiling and deployment of tape springs (FEniCSx)."
+    )
+    parser.add_argument("--version", action="version", version=f"tapecoil {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("theory", help="analytic predictions for a configuration")
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.set_defaults(func=cmd_theory)
+
+    p = sub.add_parser("config", help="print a configuration as TOML (the defaults if none is given)")
+    p.add_argument("config", nargs="?", help="TOML configuration to check and print")
+    p.set_defaults(func=cmd_config)
+    return parser
+
+
+def cmd_config(args: argparse.Namespace) -> int:
+    from .config import to_toml
+
+    _echo(to_toml(load_config(args.config)).rstrip())
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except ConfigError as exc:
+        print(f"tapecoil: configuration error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

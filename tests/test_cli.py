@@ -1,0 +1,49 @@
+"""The command line: theory table and JSON, and refusal of a broken configuration."""
+
+import json
+import shutil
+import subprocess
+
+import pytest
+
+from tapecoil.cli import main
+
+
+def test_theory_json_numbers(capsys):
+    assert main(["theory", "--json"]) == 0
+    p = json.loads(capsys.readouterr().out)["predictions"]
+    assert p["T_deploy_hub"]["value"] == pytest.approx(0.443, rel=5e-3)
+    assert p["T_deploy_ode"]["value"] == pytest.approx(0.436, rel=5e-3)
+    assert p["t90_ode"]["value"] == pytest.approx(0.352, rel=5e-3)
+    assert p["coiling_tension"]["value"] == pytest.approx(0.384, rel=5e-3)
+    assert p["coil_radius"]["value"] == pytest.approx(13.27e-3, rel=5e-3)
+    assert p["stored_energy"]["unit"] == "J"
+
+
+def test_theory_table(capsys):
+    assert main(["theory"]) == 0
+    out = capsys.readouterr().out
+    assert "0.4426 s" in out and "Eq. 2.23" in out
+    assert "0.3842 N" in out and "13.27 mm" in out
+
+
+def test_broken_config_refused(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text("[tape]\nnu = 0.7\n")
+    assert main(["theory", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "tape.nu = 0.7 is out of range: must be in (-1, 0.5)" in err
+    assert err.count("\n") == 1
+
+
+def test_config_command_round_trips(tmp_path, capsys):
+    assert main(["config"]) == 0
+    path = tmp_path / "c.toml"
+    path.write_text(capsys.readouterr().out)
+    assert main(["theory", str(path), "--json"]) == 0
+
+
+@pytest.mark.skipif(shutil.which("tapecoil") is None, reason="console script not installed")
+def test_console_script():
+    out = subprocess.run(["tapecoil", "theory", "--json"], capture_output=True, text=True, check=True).stdout
+    assert json.loads(out)["predictions"]["coiling_tension"]["value"] == pytest.approx(0.3842, rel=1e-3)
