@@ -1,0 +1,88 @@
+"""Boundary kinematics of shell edges: clamps and rigid-body rotations about an axis.
+
+A rotated edge gets rigid-body kinematics, displacement and director together: prescribing only
+the director of a Naghdi shell edge lets a thin layer there shear instead of turning the shell.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import dolfinx
+import numpy as np
+
+from .shell import NaghdiShell, angles_from_director
+
+
+def rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation by ``angle`` [rad] about the unit vector ``axis`` (Rodrigues)."""
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def _reference_frame_numpy(geometry, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The frame (t1, t2, n0) of the shell module, evaluated with numpy at parameter points."""
+    n = xi.shape[1]
+    if geometry.flat:
+        return (np.tile([[1.0], [0.0], [0.0]], n), np.tile([[0.0], [1.0], [0.0]], n), np.tile([[0.0], [0.0], [1.0]], n))
+    a = xi[1] / geometry.R
+    t1 = np.vstack([np.ones(n), np.zeros(n), np.zeros(n)])
+    n0 = np.vstack([np.zeros(n), -np.sin(a), np.cos(a)])
+    t2 = np.cross(n0.T, t1.T).T
+    return t1, t2, n0
+
+
+@dataclass
+class EdgeMotion:
+    """Dirichlet conditions holding the edge ``tag`` to a rigid motion of the reference edge.
+
+    The motion is a rotation by ``angle`` about the line through ``axis_point`` along ``axis``
+    followed by a translation; :meth:`set` updates it between load steps. With angle 0 and no
+    translation the edge is clamped.
+    """
+
+    model: NaghdiShell
+    tag: int
+    axis: np.ndarray
+    axis_point: np.ndarray
+
+    def __post_init__(self):
+        m = self.model
+        fdim = m.mesh.topology.dim - 1
+        facets = m.strip.facet_tags.find(self.tag)
+        self.bcs = []
+        self.values = []
+        for i in (0, 1):
+            Vi, _ = m.W.sub(i).collapse()
+            dofs = dolfinx.fem.locate_dofs_topological((m.W.sub(i), Vi), fdim, facets)
+            value = dolfinx.fem.Function(Vi)
+            self.values.append(value)
+            self.bcs.append(dolfinx.fem.dirichletbc(value, dofs, m.W.sub(i)))
+        self.angle = 0.0
+
+    def set(self, angle: float, translation=(0.0, 0.0, 0.0)) -> None:
+        """Prescribe the rigid motion: rotation ``angle`` [rad], then ``translation`` [m]."""
+        geom = self.model.strip.geometry
+        Q = rotation_matrix(self.axis, angle)
+        c = np.asarray(self.axis_point, dtype=float).reshape(3, 1)
+        t = np.asarray(translation, dtype=float).reshape(3, 1)
+
+        def displacement(x):
+            X = geom.phi0(x)
+            return Q @ (X - c) + c + t - X
+
+        def angles(x):
+            frame = _reference_frame_numpy(geom, x)
+            d = Q @ frame[2]
+            return angles_from_director(d, frame, theta1_near=angle)
+
+        self.values[0].interpolate(displacement)
+        self.values[1].interpolate(angles)
+        self.angle = angle
+
+
+def clamp(model: NaghdiShell, tag: int) -> EdgeMotion:
+    """A clamped edge: zero displacement and rotation."""
+    return EdgeMotion(model, tag, axis=np.array([0.0, 1.0, 0.0]), axis_point=np.zeros(3))

@@ -1,0 +1,159 @@
+"""Adaptive load stepping with cut-back, and pseudo-transient relaxation through snaps.
+
+The load parameter t runs from t_start to t_end. After an easy step (few Newton iterations)
+the step grows; after a failed one the state returns to the last converged one and the step is
+cut back. A step that still fails after ``max_cutbacks`` consecutive cut-backs, or at the
+smallest allowed step, is retried with pseudo-transient relaxation when the caller provides
+one: a viscous term c (q - q_prev) is added and a sequence of pseudo-time solves at the fixed
+target load lets the state fall through the instability (a snap) to the next stable branch,
+where a plain Newton solve finishes. If that fails too, the run stops with
+:class:`ContinuationError`; the state is then the last converged one.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .config import SolverConfig
+
+
+class ContinuationError(RuntimeError):
+    """Load stepping could not proceed; ``load`` is the last converged load parameter."""
+
+    def __init__(self, message: str, load: float):
+        super().__init__(message)
+        self.load = load
+
+
+@dataclass
+class StepRecord:
+    """One converged load step."""
+
+    load: float
+    step: float
+    iterations: int
+    cutbacks: int
+    relaxed: bool
+    wall_time: float
+
+
+@dataclass
+class Relaxation:
+    """Pseudo-transient relaxation: a viscous coefficient and the previous state it refers to.
+
+    ``coefficient`` and ``previous`` are the DOLFINx Constant and Function the residual form
+    uses in a term coefficient * M(q - previous, dq); with the coefficient 0 that term is absent.
+    ``scale`` is the coefficient's starting value; ``max_iterations`` bounds the pseudo-time solves.
+    """
+
+    coefficient: object
+    previous: object
+    scale: float
+    max_iterations: int = 200
+    tolerance: float = 1e-9
+
+
+@dataclass
+class Continuation:
+    """Drives ``solve`` (returning an object with ``converged`` and ``iterations``) over the load."""
+
+    solve: Callable[[], object]
+    set_load: Callable[[float], None]
+    state: object  # the dolfinx Function solved for
+    control: SolverConfig
+    relaxation: Relaxation | None = None
+    on_step: Callable[[StepRecord], None] | None = None
+    easy_iterations: int = 5
+    history: list[StepRecord] = field(default_factory=list)
+
+    def _relax(self, target: float) -> tuple[bool, int]:
+        """Pseudo-transient solves at the fixed load ``target``; True when back at equilibrium."""
+        relax = self.relaxation
+        q = self.state.x.array
+        c = relax.scale
+        total = 0
+        self.set_load(target)
+        try:
+            for _ in range(relax.max_iterations):
+                relax.previous.x.array[:] = q
+                relax.coefficient.value = c
+                result = self.solve()
+                total += result.iterations
+                if not result.converged:
+                    q[:] = relax.previous.x.array
+                    c *= 4.0  # smaller pseudo-time step
+                    continue
+                change = _global_norm(self.state, q - relax.previous.x.array) / max(_global_norm(self.state, q), 1e-300)
+                if change < relax.tolerance:
+                    break
+                c = max(c / 2.0, 1e-12 * relax.scale)  # larger pseudo-time step as it settles
+        finally:
+            relax.coefficient.value = 0.0
+        result = self.solve()
+        return bool(result.converged), total + result.iterations
+
+    def run(self, t_start: float, t_end: float, stops: tuple[float, ...] = ()) -> list[StepRecord]:
+        """Step the load from t_start to t_end, landing exactly on every value in ``stops``."""
+        ctl = self.control
+        span = t_end - t_start
+        marks = sorted({s for s in stops if t_start < s < t_end} | {t_end}, key=lambda s: (s - t_start) / span)
+        t = t_start
+        dt = ctl.initial_step * span
+        saved = self.state.x.array.copy()
+        cutbacks = 0
+        while marks:
+            target = t + dt
+            if (target - marks[0]) * math.copysign(1, span) >= -1e-12 * abs(span):
+                target = marks[0]
+            t0 = time.perf_counter()
+            self.set_load(target)
+            result = self.solve()
+            relaxed = False
+            if not result.converged:
+                self.state.x.array[:] = saved
+                cutbacks += 1
+                dt *= ctl.cutback
+                if cutbacks <= ctl.max_cutbacks and abs(dt) >= ctl.min_step * abs(span):
+                    continue
+                if self.relaxation is None:
+                    self.set_load(t)
+                    raise ContinuationError(
+                        f"no convergence at load {target:.6g} after {cutbacks - 1} cut-backs "
+                        f"(step {abs(dt / ctl.cutback):.3g}); last converged load {t:.6g}", t)
+                ok, its = self._relax(target)
+                if not ok:
+                    self.state.x.array[:] = saved
+                    self.set_load(t)
+                    raise ContinuationError(
+                        f"no convergence at load {target:.6g}, even with pseudo-transient relaxation; "
+                        f"last converged load {t:.6g}", t)
+                result = type("Relaxed", (), {"iterations": its})()
+                relaxed = True
+            record = StepRecord(target, target - t, result.iterations, cutbacks, relaxed, time.perf_counter() - t0)
+            self.history.append(record)
+            if self.on_step is not None:
+                self.on_step(record)
+            if target == marks[0]:
+                marks.pop(0)
+            t = target
+            saved[:] = self.state.x.array
+            if result.iterations <= self.easy_iterations and cutbacks == 0:
+                dt *= ctl.grow
+            dt = math.copysign(min(abs(dt), ctl.max_step * abs(span)), span)
+            if relaxed:  # restart gently after a snap
+                dt = ctl.initial_step * span
+            cutbacks = 0
+        return self.history
+
+
+def _global_norm(function, local_values: np.ndarray) -> float:
+    """Euclidean norm over all ranks of the owned part of a dof array of ``function``."""
+    imap = function.function_space.dofmap.index_map
+    n = imap.size_local * function.function_space.dofmap.index_map_bs
+    comm = function.function_space.mesh.comm
+    return math.sqrt(comm.allreduce(float(np.dot(local_values[:n], local_values[:n]))))

@@ -1,0 +1,133 @@
+"""A thin PETSc SNES wrapper over DOLFINx assembly, the same on DOLFINx 0.9 to 0.11.
+
+Newton with a line search and a direct solver (MUMPS) by default; any PETSc option can be
+overridden. The wrapper owns its vectors and matrix and assembles the residual with Dirichlet
+conditions applied by lifting, so that a Newton iterate that does not yet satisfy the (changed)
+boundary values is driven onto them: the residual on a constrained dof is x - g.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+from petsc4py import PETSc
+
+from . import compat
+
+DEFAULT_PETSC_OPTIONS = {
+    "snes_type": "newtonls",
+    # full Newton steps: with large rotation increments the backtracking line search creeps
+    # (measured on the roll-up cantilever); load-step cut-back handles divergence instead
+    "snes_linesearch_type": "basic",
+    "ksp_type": "preonly",
+    "pc_type": "lu",
+    "pc_factor_mat_solver_type": "mumps",
+    # MUMPS: more workspace for the indefinite saddle-point systems of the mixed shell
+    "mat_mumps_icntl_14": 200,
+    "mat_mumps_icntl_24": 1,
+}
+
+_prefix_counter = itertools.count()
+
+
+@dataclass
+class SolveResult:
+    """Outcome of one nonlinear solve."""
+
+    converged: bool
+    iterations: int
+    reason: int
+    residual_norm: float
+
+    @property
+    def reason_name(self) -> str:
+        names = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinstance(v, int)}
+        return names.get(self.reason, str(self.reason))
+
+
+class SNESSolver:
+    """Newton (PETSc SNES) for F(q) = 0 with Jacobian J and Dirichlet conditions ``bcs``.
+
+    ``options`` override :data:`DEFAULT_PETSC_OPTIONS` (PETSc option names without prefix);
+    ``rtol``, ``atol`` and ``max_it`` set the SNES tolerances.
+    """
+
+    def __init__(self, F, J, q, bcs, options=None, rtol=1e-8, atol=1e-10, max_it=25):
+        self.q = q
+        self.bcs = list(bcs)
+        self.F_form = dolfinx.fem.form(F)
+        self.J_form = dolfinx.fem.form(J)
+        V = q.function_space
+        self.b = compat.create_vector(V)
+        self.x = compat.create_vector(V)
+        self.A = dolfinx.fem.petsc.create_matrix(self.J_form)
+        self.norms: list[float] = []
+
+        comm = V.mesh.comm
+        self.snes = PETSc.SNES().create(comm)
+        self.prefix = f"tapecoil_{next(_prefix_counter)}_"
+        self.snes.setOptionsPrefix(self.prefix)
+        opts = PETSc.Options()
+        for key, value in {**DEFAULT_PETSC_OPTIONS, **(options or {})}.items():
+            opts[self.prefix + key] = value
+        self.snes.setFunction(self._residual, self.b)
+        self.snes.setJacobian(self._jacobian, self.A)
+        self.snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
+        self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
+        self.snes.setFromOptions()
+        self.snes.getKSP().setFromOptions()
+        for key in opts.getAll():  # leave no options of ours behind in the global database
+            if key.startswith(self.prefix):
+                opts.delValue(key)
+        # a non-finite residual ends the solve as diverged instead of poisoning the state
+        self.snes.setErrorIfNotConverged(False)
+
+    def _update_state(self, x) -> None:
+        qv = self.q.x.petsc_vec
+        if x.handle != qv.handle:
+            x.copy(qv)
+        qv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+    def _residual(self, _snes, x, b) -> None:
+        self._update_state(x)
+        with b.localForm() as b_local:
+            b_local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(b, self.F_form)
+        dolfinx.fem.petsc.apply_lifting(b, [self.J_form], bcs=[self.bcs], x0=[self.q.x.petsc_vec], alpha=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(b, self.bcs, self.q.x.petsc_vec, -1.0)
+
+    def _jacobian(self, _snes, x, A, _P) -> None:
+        self._update_state(x)
+        A.zeroEntries()
+        compat.assemble_matrix(A, self.J_form, self.bcs)
+        A.assemble()
+
+    def solve(self) -> SolveResult:
+        """Solve from the current state ``q``; on failure ``q`` holds the last iterate."""
+        self.norms.clear()
+        self.q.x.petsc_vec.copy(self.x)
+        self.snes.solve(None, self.x)
+        reason = self.snes.getConvergedReason()
+        norm = self.snes.getFunctionNorm()
+        converged = reason > 0 and np.isfinite(norm)
+        if converged:
+            self._update_state(self.x)
+        return SolveResult(converged, self.snes.getIterationNumber(), reason, float(norm))
+
+    def residual_vector(self):
+        """The residual at the current state without Dirichlet rows zeroed (reactions live there)."""
+        b = self.b.duplicate()
+        with b.localForm() as b_local:
+            b_local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(b, self.F_form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return b
+
+    def destroy(self) -> None:
+        for obj in (self.snes, self.A, self.b, self.x):
+            obj.destroy()
