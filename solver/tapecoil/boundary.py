@@ -22,18 +22,6 @@ def rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
 
 
-def _reference_frame_numpy(geometry, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The frame (t1, t2, n0) of the shell module, evaluated with numpy at parameter points."""
-    n = xi.shape[1]
-    if geometry.flat:
-        return (np.tile([[1.0], [0.0], [0.0]], n), np.tile([[0.0], [1.0], [0.0]], n), np.tile([[0.0], [0.0], [1.0]], n))
-    a = xi[1] / geometry.R
-    t1 = np.vstack([np.ones(n), np.zeros(n), np.zeros(n)])
-    n0 = np.vstack([np.zeros(n), -np.sin(a), np.cos(a)])
-    t2 = np.cross(n0.T, t1.T).T
-    return t1, t2, n0
-
-
 @dataclass
 class EdgeMotion:
     """Dirichlet conditions holding the edge ``tag`` to a rigid motion of the reference edge.
@@ -74,7 +62,7 @@ class EdgeMotion:
             return Q @ (X - c) + c + t - X
 
         def angles(x):
-            frame = _reference_frame_numpy(geom, x)
+            frame = geom.frame(x)
             d = Q @ frame[2]
             return angles_from_director(d, frame, theta1_near=angle)
 

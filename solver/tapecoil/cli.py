@@ -70,6 +70,54 @@ def cmd_theory(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_verify(args: argparse.Namespace) -> int:
+    import time
+
+    config = load_config(args.config)
+    from .verification import CASES, run_case
+
+    names = CASES if args.case == "all" else (args.case,)
+    results = []
+    for name in names:
+        t0 = time.perf_counter()
+        result = run_case(name, config, args.mesh)
+        result.info["case_wall_time"] = time.perf_counter() - t0
+        results.append(result)
+        if not args.json:
+            _echo(
+                f"{name} ({args.mesh} mesh, {result.info.get('mesh', '')}, {result.info['case_wall_time']:.1f} s)"
+            )
+            for c in result.checks:
+                err = f"{c.error:.2e}" + ("" if c.absolute else " rel")
+                _echo(
+                    f"  {c.name:<40} computed {c.computed:<12.6g} reference {c.reference:<10.6g} "
+                    f"error {err:<13} tol {c.tolerance:g}  {'PASS' if c.passed else 'FAIL'}"
+                )
+    if args.json:
+        payload = [
+            {
+                "case": r.case,
+                "passed": r.passed,
+                "checks": [
+                    {
+                        "name": c.name,
+                        "computed": c.computed,
+                        "reference": c.reference,
+                        "error": c.error,
+                        "tolerance": c.tolerance,
+                        "absolute": c.absolute,
+                        "passed": c.passed,
+                    }
+                    for c in r.checks
+                ],
+                "info": r.info,
+            }
+            for r in results
+        ]
+        _echo(json.dumps(payload, indent=2, default=float))
+    return 0 if all(r.passed for r in results) else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tapecoil", description="Coiling and deployment of tape springs (FEniCSx)."
@@ -81,6 +129,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=cmd_theory)
+
+    from .verification import CASES
+
+    p = sub.add_parser("verify", help="run the shell verification cases against their references")
+    p.add_argument("case", nargs="?", default="all", choices=(*CASES, "all"))
+    p.add_argument("config", nargs="?", help="TOML configuration (the tape cases use its tape)")
+    p.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.set_defaults(func=cmd_verify)
 
     p = sub.add_parser("config", help="print a configuration as TOML (the defaults if none is given)")
     p.add_argument("config", nargs="?", help="TOML configuration to check and print")

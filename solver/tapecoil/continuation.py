@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -88,7 +88,9 @@ class Continuation:
                     q[:] = relax.previous.x.array
                     c *= 4.0  # smaller pseudo-time step
                     continue
-                change = _global_norm(self.state, q - relax.previous.x.array) / max(_global_norm(self.state, q), 1e-300)
+                change = _global_norm(self.state, q - relax.previous.x.array) / max(
+                    _global_norm(self.state, q), 1e-300
+                )
                 if change < relax.tolerance:
                     break
                 c = max(c / 2.0, 1e-12 * relax.scale)  # larger pseudo-time step as it settles
@@ -101,7 +103,9 @@ class Continuation:
         """Step the load from t_start to t_end, landing exactly on every value in ``stops``."""
         ctl = self.control
         span = t_end - t_start
-        marks = sorted({s for s in stops if t_start < s < t_end} | {t_end}, key=lambda s: (s - t_start) / span)
+        marks = sorted(
+            {s for s in stops if t_start < s < t_end} | {t_end}, key=lambda s: (s - t_start) / span
+        )
         t = t_start
         dt = ctl.initial_step * span
         saved = self.state.x.array.copy()
@@ -124,17 +128,23 @@ class Continuation:
                     self.set_load(t)
                     raise ContinuationError(
                         f"no convergence at load {target:.6g} after {cutbacks - 1} cut-backs "
-                        f"(step {abs(dt / ctl.cutback):.3g}); last converged load {t:.6g}", t)
+                        f"(step {abs(dt / ctl.cutback):.3g}); last converged load {t:.6g}",
+                        t,
+                    )
                 ok, its = self._relax(target)
                 if not ok:
                     self.state.x.array[:] = saved
                     self.set_load(t)
                     raise ContinuationError(
                         f"no convergence at load {target:.6g}, even with pseudo-transient relaxation; "
-                        f"last converged load {t:.6g}", t)
+                        f"last converged load {t:.6g}",
+                        t,
+                    )
                 result = type("Relaxed", (), {"iterations": its})()
                 relaxed = True
-            record = StepRecord(target, target - t, result.iterations, cutbacks, relaxed, time.perf_counter() - t0)
+            record = StepRecord(
+                target, target - t, result.iterations, cutbacks, relaxed, time.perf_counter() - t0
+            )
             self.history.append(record)
             if self.on_step is not None:
                 self.on_step(record)

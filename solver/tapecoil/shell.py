@@ -20,15 +20,15 @@ reference area is h/2 C(e):e + h^3/24 C(k):k + kappa G h / 2 g.A.g with
 C(S) = E/(1-nu^2) ((1-nu) A S A + nu tr(A S) A), kappa = 5/6, integrated with sqrt(det a0).
 
 Locking. A thin shell (here R/h = 151 and elements 40 h long) locks in membrane and shear if
-those terms are integrated exactly with low-order elements. Three treatments are available
-(``technology``):
-  - "full": everything with full quadrature (a locking reference, for the verification table);
-  - "psri": partial selective reduced integration, the membrane + shear energy split into a
-    fraction h^2/h_e^2 with full and the rest with reduced quadrature;
-  - "mixed": Hellinger-Reissner; membrane and shear stress resultants are independent fields,
-    discontinuous, one degree below the displacement, so the strains that enter the energy
-    are their element-wise L2 projections. The energy is then a saddle point.
-The verification module compares them on the benchmark tape; the docs record the choice.
+those terms are integrated exactly with low-order elements. ``technology`` selects:
+  - "psri" (default): partial selective reduced integration on Q2 elements. The membrane and
+    shear energies are split into a fraction h^2/h_e^2 integrated with full (3 x 3 Gauss) and
+    the rest with reduced (2 x 2) quadrature; bending is integrated fully. Every energy is
+    reported with exactly the quadrature the solve uses.
+  - "full": everything with full quadrature; kept as the locking reference of the
+    verification table.
+docs/shell-technology.md records the measurements behind the choice (a Hellinger-Reissner
+variant with discontinuous resultants was tried and rejected: zero-energy modes).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 import ufl
 
-TECHNOLOGIES = ("full", "psri", "mixed")
+TECHNOLOGIES = ("full", "psri")
 SHEAR_CORRECTION = 5.0 / 6.0
 
 
@@ -58,11 +58,6 @@ class ShellMaterial:
 def _plane_stress(S, A, E: float, nu: float):
     """Contravariant stress-like tensor C(S) of a covariant strain S, isotropic plane stress."""
     return E / (1 - nu**2) * ((1 - nu) * ufl.dot(ufl.dot(A, S), A) + nu * ufl.tr(ufl.dot(A, S)) * A)
-
-
-def _plane_stress_compliance(N, a, E: float, nu: float):
-    """Covariant strain of a contravariant stress N: the inverse of :func:`_plane_stress`."""
-    return ((1 + nu) * ufl.dot(ufl.dot(a, N), a) - nu * ufl.tr(ufl.dot(a, N)) * a) / E
 
 
 def director_from_angles(theta, frame):
@@ -90,11 +85,10 @@ class NaghdiShell:
     """The shell's function space, state, kinematics, energies and forms.
 
     ``strip`` is a :class:`tapecoil.geometry.StripMesh`. The unknown ``q`` holds the
-    displacement u (3 components, m) and the director angles theta (2 components, rad), plus
-    the stress resultants for the mixed technology.
+    displacement u (3 components, m) and the director angles theta (2 components, rad).
     """
 
-    def __init__(self, strip, material: ShellMaterial, technology: str = "mixed", degree: int = 2):
+    def __init__(self, strip, material: ShellMaterial, technology: str = "psri", degree: int = 2):
         import basix.ufl
         import dolfinx
 
@@ -110,12 +104,6 @@ class NaghdiShell:
         P = basix.ufl.element("Lagrange", cell, degree, shape=(3,))
         T = basix.ufl.element("Lagrange", cell, degree, shape=(2,))
         parts = [P, T]
-        if technology == "mixed":
-            # membrane (3 independent components of a symmetric 2x2) and shear (2) resultants
-            parts += [
-                basix.ufl.element("DG", cell, degree - 1, shape=(3,)),
-                basix.ufl.element("DG", cell, degree - 1, shape=(2,)),
-            ]
         self.W = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element(parts))
         self.q = dolfinx.fem.Function(self.W, name="state")
         self.dq = ufl.TestFunction(self.W)
@@ -126,7 +114,9 @@ class NaghdiShell:
         self.q_reduced = 2 * degree - 1
         self.dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": self.q_full})
         self.dx_reduced = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": self.q_reduced})
-        self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=strip.facet_tags, metadata={"quadrature_degree": self.q_full})
+        self.ds = ufl.Measure(
+            "ds", domain=mesh, subdomain_data=strip.facet_tags, metadata={"quadrature_degree": self.q_full}
+        )
 
         xi = ufl.SpatialCoordinate(mesh)
         self.xi = xi
@@ -165,41 +155,25 @@ class NaghdiShell:
         if technology == "full":
             self.energy_membrane = psi_m * dA * self.dx
             self.energy_shear = psi_s * dA * self.dx
-            self.lagrangian = self.energy_membrane + self.energy_bending + self.energy_shear
-        elif technology == "psri":
-            # element size in the (isometric) parameter plane; the reference quad is [0, 1]^2
-            if mesh.topology.cell_name() == "quadrilateral":
-                cell_size = ufl.sqrt(abs(ufl.JacobianDeterminant(mesh)))
-            else:
-                cell_size = ufl.CellDiameter(mesh)
-            alpha = ufl.min_value(h**2 / cell_size**2, 1.0)
+        else:
+            # physical element size: reference cell [0, 1]^2 (or the unit triangle) times the
+            # area scale sqrt(det a0) of the map to 3D
+            area = abs(ufl.JacobianDeterminant(mesh)) * dA
+            if mesh.topology.cell_name() != "quadrilateral":
+                area = area / 2
+            alpha = ufl.min_value(h**2 / area, 1.0)
             self.energy_membrane = alpha * psi_m * dA * self.dx + (1 - alpha) * psi_m * dA * self.dx_reduced
             self.energy_shear = alpha * psi_s * dA * self.dx + (1 - alpha) * psi_s * dA * self.dx_reduced
-            self.lagrangian = self.energy_membrane + self.energy_bending + self.energy_shear
-        else:
-            Nv, Qv = fields[2], fields[3]
-            N = ufl.as_matrix([[Nv[0], Nv[2]], [Nv[2], Nv[1]]])
-            self.membrane_resultant, self.shear_resultant = N, Qv
-            a = self.a0
-            # complementary energies of the independent resultants (what the solve stores)
-            self.energy_membrane = 0.5 / h * ufl.inner(_plane_stress_compliance(N, a, E, nu), N) * dA * self.dx
-            self.energy_shear = 0.5 / (SHEAR_CORRECTION * G * h) * ufl.dot(Qv, ufl.dot(a, Qv)) * dA * self.dx
-            coupling = (ufl.inner(N, e) + ufl.dot(Qv, g)) * dA * self.dx
-            self.lagrangian = coupling - self.energy_membrane - self.energy_shear + self.energy_bending
 
     # -- state access --------------------------------------------------------------------
-    def subspace(self, i: int):
-        """Collapsed sub-space i (0: displacement, 1: angles) and its map into W."""
-        return self.W.sub(i).collapse()
-
     @property
     def strain_energy(self):
         """Total strain energy form, evaluated with the quadrature the solve uses."""
         return self.energy_membrane + self.energy_bending + self.energy_shear
 
     def residual(self, external_work=None):
-        """Residual form: the derivative of Lagrangian - external work in the direction dq."""
-        total = self.lagrangian if external_work is None else self.lagrangian - external_work
+        """Residual: the derivative of strain energy - external work in the direction dq."""
+        total = self.strain_energy if external_work is None else self.strain_energy - external_work
         return ufl.derivative(total, self.q, self.dq)
 
     def jacobian_form(self, residual):

@@ -49,6 +49,49 @@ class SolveResult:
         return names.get(self.reason, str(self.reason))
 
 
+def owned_node_dofs(V, sub: tuple[int, ...], point) -> np.ndarray:
+    """Owned dofs of the (sub-)space ``V.sub(i).sub(j)...`` at the node at ``point`` (collective-free).
+
+    Returns indices into the local dof array of V; empty on ranks that do not own the node.
+    """
+    space = V
+    for i in sub:
+        space = space.sub(i)
+    collapsed, _ = space.collapse()
+    p = np.asarray(point, dtype=float)
+
+    def at_point(x):
+        return np.isclose(x[0], p[0], atol=1e-10 * (1 + abs(p[0]))) & np.isclose(
+            x[1], p[1], atol=1e-10 * (1 + abs(p[1]))
+        )
+
+    dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_point)[0]
+    n_owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+    return dofs[dofs < n_owned]
+
+
+def node_value(q, sub: tuple[int, ...], point) -> float:
+    """Value of a scalar component of q at a mesh node, on every rank (collective)."""
+    dofs = owned_node_dofs(q.function_space, sub, point)
+    comm = q.function_space.mesh.comm
+    count = comm.allreduce(len(dofs))
+    if count != 1:
+        raise ValueError(f"expected one node at {point}, found {count}")
+    return comm.allreduce(float(q.x.array[dofs].sum()))
+
+
+@dataclass
+class PointForce:
+    """A concentrated force on the dofs ``dofs`` (owned, local indices) of magnitude ``magnitude``.
+
+    ``magnitude`` is an object with a ``value`` (a dolfinx Constant works) so that load
+    stepping can change it.
+    """
+
+    dofs: np.ndarray
+    magnitude: object
+
+
 class SNESSolver:
     """Newton (PETSc SNES) for F(q) = 0 with Jacobian J and Dirichlet conditions ``bcs``.
 
@@ -66,6 +109,7 @@ class SNESSolver:
         self.x = compat.create_vector(V)
         self.A = dolfinx.fem.petsc.create_matrix(self.J_form)
         self.norms: list[float] = []
+        self.point_forces: list[PointForce] = []
 
         comm = V.mesh.comm
         self.snes = PETSc.SNES().create(comm)
@@ -99,6 +143,9 @@ class SNESSolver:
         dolfinx.fem.petsc.assemble_vector(b, self.F_form)
         dolfinx.fem.petsc.apply_lifting(b, [self.J_form], bcs=[self.bcs], x0=[self.q.x.petsc_vec], alpha=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        with b.localForm() as b_local:
+            for force in self.point_forces:
+                b_local.array[force.dofs] -= force.magnitude.value  # residual = internal - external
         dolfinx.fem.petsc.set_bc(b, self.bcs, self.q.x.petsc_vec, -1.0)
 
     def _jacobian(self, _snes, x, A, _P) -> None:

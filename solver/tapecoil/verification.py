@@ -10,12 +10,14 @@ import time
 from dataclasses import dataclass, field
 
 import dolfinx
+import dolfinx.fem.petsc
 import numpy as np
 import ufl
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from . import theory
-from .boundary import clamp
+from .boundary import EdgeMotion, clamp
 from .config import Config
 from .geometry import FREE_END, ROOT, MeshResolution, StripGeometry, create_strip_mesh
 from .shell import NaghdiShell, ShellMaterial
@@ -56,13 +58,6 @@ class CaseResult:
         return all(c.passed for c in self.checks)
 
 
-def assemble(form) -> float:
-    """Assemble a scalar form over all ranks (collective)."""
-    local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(form))
-    comm = form.ufl_domain().ufl_cargo().comm if hasattr(form, "ufl_domain") else MPI.COMM_WORLD
-    return comm.allreduce(local, op=MPI.SUM)
-
-
 def _edge_integral(model: NaghdiShell, integrand, tag: int) -> float:
     local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand * model.ds(tag)))
     return model.mesh.comm.allreduce(local, op=MPI.SUM)
@@ -93,15 +88,22 @@ def quadratic_energies(model: NaghdiShell) -> dict[str, float]:
         for name in ("membrane", "bending", "shear"):
             form = getattr(model, f"energy_{name}")
             second = ufl.derivative(ufl.derivative(form, model.q, direction), model.q, direction)
-            out[name] = 0.5 * comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(second)), op=MPI.SUM)
+            out[name] = 0.5 * comm.allreduce(
+                dolfinx.fem.assemble_scalar(dolfinx.fem.form(second)), op=MPI.SUM
+            )
     finally:
         model.q.x.array[:] = direction.x.array
     out["total"] = out["membrane"] + out["bending"] + out["shear"]
     return out
 
 
-def tape_linear(config: Config, resolution: MeshResolution, technology: str = "mixed", comm=MPI.COMM_WORLD,
-                rotation: float = 1e-4) -> CaseResult:
+def tape_linear(
+    config: Config,
+    resolution: MeshResolution,
+    technology: str = "psri",
+    comm=MPI.COMM_WORLD,
+    rotation: float = 1e-4,
+) -> CaseResult:
     """The benchmark tape clamped at the root, a small end moment about the width axis.
 
     The moment is applied as the axial traction (M/I)(z - z_c) h on the free end, the
@@ -160,8 +162,20 @@ def _edge_average(model: NaghdiShell, expr, tag: int, length: float) -> np.ndarr
     return np.array([_edge_integral(model, expr[i], tag) / length for i in range(len(expr))])
 
 
-def rollup(resolution: MeshResolution | None = None, turns: int = 2, comm=MPI.COMM_WORLD,
-           control=None, technology: str = "psri") -> CaseResult:
+ROLLUP_MESHES = {
+    "coarse": MeshResolution(1, 24),
+    "default": MeshResolution(2, 32),
+    "fine": MeshResolution(4, 64),
+}
+
+
+def rollup(
+    resolution: MeshResolution | None = None,
+    turns: int = 2,
+    comm=MPI.COMM_WORLD,
+    control=None,
+    technology: str = "psri",
+) -> CaseResult:
     """Roll-up of a cantilever strip by an end moment (Sze, Liu and Lo 2004).
 
     L = 12, width 1, h = 0.1, E = 1.2e6, nu = 0; M_max = 2 pi E I / L rolls it into a full
@@ -174,7 +188,7 @@ def rollup(resolution: MeshResolution | None = None, turns: int = 2, comm=MPI.CO
     from .continuation import Continuation
 
     L, b, h, E = 12.0, 1.0, 0.1, 1.2e6
-    res = resolution or MeshResolution(across=2, along=32)
+    res = resolution or ROLLUP_MESHES["default"]
     strip = create_strip_mesh(comm, StripGeometry(math.inf, b, L), res)
     model = NaghdiShell(strip, ShellMaterial(E, 0.0, h), technology)
     M_max = 2 * math.pi * E * (b * h**3 / 12) / L
@@ -203,7 +217,9 @@ def rollup(resolution: MeshResolution | None = None, turns: int = 2, comm=MPI.CO
         k = theta / math.pi
         if abs(k - round(k)) < 1e-9:
             label = f"{k / 2:g} turn" + ("s" if k != 2 else "")
-            checks.append(Check(f"tip error / L at {label}", float(np.linalg.norm(tip - exact) / L), 0.0, 0.01, True))
+            checks.append(
+                Check(f"tip error / L at {label}", float(np.linalg.norm(tip - exact) / L), 0.0, 0.01, True)
+            )
     solver.destroy()
     return CaseResult(
         "rollup",
@@ -213,6 +229,185 @@ def rollup(resolution: MeshResolution | None = None, turns: int = 2, comm=MPI.CO
             "dofs": model.W.dofmap.index_map.size_global * model.W.dofmap.index_map_bs,
             "steps": len(run),
             "newton_iterations": [s.iterations for s in run],
+            "tip": [[theta, *tip.tolist()] for theta, tip, _ in tips],
             "wall_time": wall,
         },
     )
+
+
+def stress_free(config: Config, resolution: MeshResolution, comm=MPI.COMM_WORLD) -> CaseResult:
+    """The benchmark tape in its reference configuration carries no strain and no residual.
+
+    Checks: strain energy below 1e-12 J and the residual at round-off, below 1e-12 of the
+    residual that a unit rotation of the free end would cause (the scale of the forces the
+    discretisation can represent).
+    """
+    tp = config.tape
+    strip = create_strip_mesh(comm, StripGeometry.from_config(config), resolution)
+    model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h))
+    energy = energies(model)["total"]
+    F0 = dolfinx.fem.form(model.residual())
+    b = dolfinx.fem.petsc.assemble_vector(F0)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    r0 = b.norm()
+    # scale: the residual of the reference state with the free end turned by 1 rad rigidly
+    end = EdgeMotion(model, FREE_END, axis=np.array([0.0, 1.0, 0.0]), axis_point=np.array([tp.L, 0.0, 0.0]))
+    end.set(1.0)
+    model.q.x.array[:] = 0.0
+    for bc in end.bcs:
+        bc.set(model.q.x.array)
+    model.q.x.scatter_forward()
+    b1 = dolfinx.fem.petsc.assemble_vector(F0)
+    b1.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    scale = b1.norm()
+    b.destroy()
+    b1.destroy()
+    return CaseResult(
+        "stress-free",
+        [
+            Check("reference strain energy [J]", energy, 0.0, 1e-12, True),
+            Check("reference residual / residual scale", r0 / scale, 0.0, 1e-12, True),
+        ],
+        {"mesh": f"{resolution.along} x {resolution.across}", "residual_norm": r0, "residual_scale": scale},
+    )
+
+
+CASES = ("stress-free", "tape-linear", "rollup", "semicylinder", "slit-plate")
+
+
+def run_case(name: str, config: Config, preset: str, comm=MPI.COMM_WORLD) -> CaseResult:
+    """Run the verification case ``name`` on the mesh preset ``preset`` (collective)."""
+    from .config import MeshConfig
+
+    tape_res = MeshResolution.from_config(MeshConfig(preset=preset), config.tape.L)
+    if name == "stress-free":
+        return stress_free(config, tape_res, comm)
+    if name == "tape-linear":
+        return tape_linear(config, tape_res, comm=comm)
+    if name == "rollup":
+        return rollup(ROLLUP_MESHES[preset], comm=comm)
+    if name == "semicylinder":
+        return semicylinder(SEMICYLINDER_MESHES[preset], comm=comm)
+    if name == "slit-plate":
+        return slit_plate(SLIT_PLATE_MESHES[preset], comm=comm)
+    raise ValueError(f"unknown verification case {name!r} (known: {', '.join(CASES)})")
+
+
+SEMICYLINDER_MESHES = {
+    "coarse": MeshResolution(12, 12),
+    "default": MeshResolution(20, 20),
+    "fine": MeshResolution(32, 32),
+}
+SLIT_PLATE_MESHES = {
+    "coarse": MeshResolution(4, 32),
+    "default": MeshResolution(6, 48),
+    "fine": MeshResolution(10, 80),
+}
+
+
+def _solve_to_full_load(model, F, bcs, set_load, control, point_forces=()):
+    """Newton with adaptive load stepping from 0 to the full load; returns the step history."""
+    from .continuation import Continuation
+
+    solver = SNESSolver(F, model.jacobian_form(F), model.q, bcs)
+    solver.point_forces.extend(point_forces)
+    history = Continuation(solver.solve, set_load, model.q, control).run(0.0, 1.0)
+    solver.destroy()
+    return history
+
+
+def semicylinder(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, control=None) -> CaseResult:
+    """Pinched semi-cylinder (Sze, Liu and Lo 2004): deflection under the load, 1.715 at P = 2000.
+
+    R = 1.016, L = 3.048, h = 0.03, E = 2.0685e7, nu = 0.3. The whole semi-cylinder: one curved
+    end clamped; on the straight edges (in the plane through the axis) the displacement normal to
+    that plane and the rotation about the axis are zero; the point force P at the crown of the
+    free end pushes towards the axis. Reference: the deflection there, 1.71505 (Sze's S4R table).
+    """
+    from .config import SolverConfig
+    from .geometry import SIDE_NEG, SIDE_POS
+    from .solvers import PointForce, node_value, owned_node_dofs
+
+    R, L, h, E, nu, P = 1.016, 3.048, 0.03, 2.0685e7, 0.3, 2000.0
+    res = resolution or SEMICYLINDER_MESHES["default"]
+    strip = create_strip_mesh(comm, StripGeometry(R, math.pi * R, L), res)
+    model = NaghdiShell(strip, ShellMaterial(E, nu, h))
+    bcs = list(clamp(model, ROOT).bcs)
+    fdim = strip.mesh.topology.dim - 1
+    sides = np.concatenate([strip.facet_tags.find(SIDE_NEG), strip.facet_tags.find(SIDE_POS)])
+    for sub in ((0, 2), (1, 0)):  # u_z (normal to the plane of the edges), theta_0 (about the axis)
+        space = model.W.sub(sub[0]).sub(sub[1])
+        collapsed, _ = space.collapse()
+        dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), fdim, sides)
+        bcs.append(dolfinx.fem.dirichletbc(dolfinx.fem.Function(collapsed), dofs, space))
+    load = dolfinx.fem.Constant(strip.mesh, 0.0)
+    crown = (L, 0.0)
+    force = PointForce(owned_node_dofs(model.W, (0, 2), crown), load)
+    t0 = time.perf_counter()
+    history = _solve_to_full_load(
+        model,
+        model.residual(),
+        bcs,
+        lambda t: setattr(load, "value", t * P),
+        control or SolverConfig(initial_step=0.1, max_step=0.2),
+        [force],
+    )
+    wall = time.perf_counter() - t0
+    W = node_value(model.q, (0, 2), crown)
+    return CaseResult(
+        "semicylinder",
+        [Check("deflection under the load at P = 2000", W, 1.71505, 0.02)],
+        {
+            "mesh": f"{res.along} x {res.across}",
+            "dofs": _dofs(model),
+            "steps": len(history),
+            "newton_iterations": [s.iterations for s in history],
+            "wall_time": wall,
+        },
+    )
+
+
+def slit_plate(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, control=None) -> CaseResult:
+    """Slit annular plate under a line force at the free slit edge (Sze, Liu and Lo 2004).
+
+    R_i = 6, R_o = 10, h = 0.03, E = 21e6, nu = 0. One slit edge clamped, the other loaded by
+    0.8 per unit length (3.2 in all) normal to the plate. References: the deflections of the
+    loaded edge at the inner radius (A) 13.891 and at the outer radius (B) 17.528.
+    """
+    from .config import SolverConfig
+    from .geometry import AnnulusGeometry
+
+    Ri, Ro, h, E, p_max = 6.0, 10.0, 0.03, 21e6, 0.8
+    res = resolution or SLIT_PLATE_MESHES["default"]
+    strip = create_strip_mesh(comm, AnnulusGeometry(Ri, Ro), res)
+    model = NaghdiShell(strip, ShellMaterial(E, 0.0, h))
+    line_force = dolfinx.fem.Constant(strip.mesh, 0.0)
+    work = line_force * model.u[2] * model.ds(FREE_END)  # xi_2 = r: ds is the physical length
+    t0 = time.perf_counter()
+    history = _solve_to_full_load(
+        model,
+        model.residual(work),
+        clamp(model, ROOT).bcs,
+        lambda t: setattr(line_force, "value", t * p_max),
+        control or SolverConfig(initial_step=0.05, max_step=0.1),
+    )
+    wall = time.perf_counter() - t0
+    from .solvers import node_value
+
+    wA = node_value(model.q, (0, 2), (2 * math.pi, Ri))
+    wB = node_value(model.q, (0, 2), (2 * math.pi, Ro))
+    return CaseResult(
+        "slit-plate",
+        [Check("w_A (inner radius)", wA, 13.891, 0.02), Check("w_B (outer radius)", wB, 17.528, 0.02)],
+        {
+            "mesh": f"{res.along} x {res.across}",
+            "dofs": _dofs(model),
+            "steps": len(history),
+            "newton_iterations": [s.iterations for s in history],
+            "wall_time": wall,
+        },
+    )
+
+
+def _dofs(model: NaghdiShell) -> int:
+    return model.W.dofmap.index_map.size_global * model.W.dofmap.index_map_bs
