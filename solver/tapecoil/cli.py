@@ -84,9 +84,8 @@ def cmd_verify(args: argparse.Namespace) -> int:
         result.info["case_wall_time"] = time.perf_counter() - t0
         results.append(result)
         if not args.json:
-            _echo(
-                f"{name} ({args.mesh} mesh, {result.info.get('mesh', '')}, {result.info['case_wall_time']:.1f} s)"
-            )
+            mesh, wall = result.info.get("mesh", ""), result.info["case_wall_time"]
+            _echo(f"{name} ({args.mesh} mesh, {mesh}, {wall:.1f} s)")
             for c in result.checks:
                 err = f"{c.error:.2e}" + ("" if c.absolute else " rel")
                 _echo(

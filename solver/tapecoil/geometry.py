@@ -273,7 +273,7 @@ def _to_parameter_coordinates(geom: StripGeometry) -> None:
 
     tags, coords, _ = gmsh.model.mesh.getNodes()
     xi = geom.phi0_inverse(coords.reshape(-1, 3).T)
-    for tag, a, b in zip(tags, xi[0], xi[1]):
+    for tag, a, b in zip(tags, xi[0], xi[1], strict=True):
         gmsh.model.mesh.setNode(int(tag), [float(a), float(b), 0.0], [])
 
 

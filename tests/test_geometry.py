@@ -1,0 +1,115 @@
+"""gmsh strip and annulus: one surface for parameters and 3D, tags, presets, hub."""
+
+import math
+
+import dolfinx
+import numpy as np
+import pytest
+import ufl
+from mpi4py import MPI
+
+from tapecoil.config import MeshConfig, load_config
+from tapecoil.geometry import (
+    FREE_END,
+    ROOT,
+    SIDE_NEG,
+    SIDE_POS,
+    AnnulusGeometry,
+    MeshResolution,
+    StripGeometry,
+    build_hub_gmsh,
+    create_strip_mesh,
+)
+
+
+def integrate(mesh, expr, measure):
+    return mesh.comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(expr * measure)), op=MPI.SUM)
+
+
+@pytest.fixture
+def tape_mesh():
+    cfg = load_config()
+    geom = StripGeometry.from_config(cfg)
+    return create_strip_mesh(MPI.COMM_WORLD, geom, MeshResolution(across=4, along=20, grading=2.0)), cfg
+
+
+def test_presets():
+    L = 0.5
+    assert MeshResolution.from_config(MeshConfig(preset="default"), L) == MeshResolution(9, 125)
+    coarse = MeshResolution.from_config(MeshConfig(preset="coarse"), L)
+    fine = MeshResolution.from_config(MeshConfig(preset="fine"), L)
+    assert coarse.along < 125 < fine.along and coarse.across < 9 < fine.across
+    custom = MeshResolution.from_config(MeshConfig(preset="coarse", elements_across=7, element_size=0.01), L)
+    assert (custom.across, custom.along) == (7, 50)
+
+
+def test_strip_parameter_domain_and_tags(tape_mesh):
+    strip, cfg = tape_mesh
+    mesh, tp = strip.mesh, cfg.tape
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=strip.facet_tags)
+    assert integrate(mesh, 1.0, ufl.dx(domain=mesh)) == pytest.approx(tp.L * tp.b, rel=1e-12)
+    for tag, length in ((ROOT, tp.b), (FREE_END, tp.b), (SIDE_NEG, tp.L), (SIDE_POS, tp.L)):
+        assert integrate(mesh, 1.0, ds(tag)) == pytest.approx(length, rel=1e-12)
+    x = mesh.geometry.x
+    assert np.all(x[:, 0] >= -1e-14) and np.all(x[:, 0] <= tp.L + 1e-14)
+    assert np.all(np.abs(x[:, 1]) <= tp.b / 2 + 1e-14)
+    # the side centroids tell the sides apart: SIDE_NEG at xi_2 = -b/2
+    xi = ufl.SpatialCoordinate(mesh)
+    assert integrate(mesh, xi[1], ds(SIDE_NEG)) == pytest.approx(-tp.b / 2 * tp.L, rel=1e-12)
+
+
+def test_strip_nodes_lie_on_the_cylinder(tape_mesh):
+    """Parameter nodes mapped by phi0 are points of the arc of radius R about (y, z) = (0, R)."""
+    strip, cfg = tape_mesh
+    X = strip.geometry.phi0(strip.mesh.geometry.x.T)
+    radius = np.hypot(X[1], X[2] - cfg.tape.R)
+    assert np.allclose(radius, cfg.tape.R, rtol=1e-12)
+    # 3D area of the mapped surface (sqrt det a0 = 1 for this isometric map)
+    assert np.allclose(strip.geometry.phi0_inverse(X), strip.mesh.geometry.x[:, :2].T, atol=1e-14)
+
+
+def test_grading(tape_mesh):
+    strip, _ = tape_mesh
+    x = np.unique(np.round(strip.mesh.geometry.x[:, 0], 12))
+    gathered = np.unique(np.concatenate(MPI.COMM_WORLD.allgather(x)))
+    steps = np.diff(gathered)
+    assert steps[-1] / steps[0] == pytest.approx(2.0, rel=1e-6)  # last / first element length
+
+
+def test_frame_matches_jacobian():
+    geom = StripGeometry(0.0151, 0.0356, 0.5)
+    xi = np.array([[0.1, 0.2], [-0.01, 0.015]])
+    t1, t2, n0 = geom.frame(xi)
+    assert np.allclose(np.einsum("in,in->n", t1, n0), 0) and np.allclose(np.einsum("in,in->n", t2, n0), 0)
+    assert np.allclose(n0[:, 0], [0, -math.sin(-0.01 / 0.0151), math.cos(-0.01 / 0.0151)])
+    eps = 1e-7
+    fd = (geom.phi0(xi + [[0], [eps]]) - geom.phi0(xi - [[0], [eps]])) / (2 * eps)
+    assert np.allclose(geom.jacobian(xi)[:, 1], fd, atol=1e-8)
+
+
+def test_annulus():
+    geom = AnnulusGeometry(6.0, 10.0)
+    strip = create_strip_mesh(MPI.COMM_WORLD, geom, MeshResolution(across=3, along=16))
+    mesh = strip.mesh
+    xi = ufl.SpatialCoordinate(mesh)
+    # area of the annulus: integral of r over (angle, r)
+    assert integrate(mesh, xi[1], ufl.dx(domain=mesh)) == pytest.approx(math.pi * (100 - 36), rel=1e-12)
+    eps = 1e-7
+    pts = np.array([[0.3, 5.0], [6.5, 9.0]])
+    fd = (geom.phi0(pts + [[eps], [0]]) - geom.phi0(pts - [[eps], [0]])) / (2 * eps)
+    assert np.allclose(geom.jacobian(pts)[:, 0], fd, atol=1e-6)
+
+
+def test_hub_surface():
+    import gmsh
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        build_hub_gmsh(0.0127, 1e-4, 0.0356, 0.002)
+        _, _, tags = gmsh.model.mesh.getElements(2)
+        assert sum(len(t) for t in tags) > 0
+        area = sum(gmsh.model.occ.getMass(2, t) for t in gmsh.model.getEntitiesForPhysicalGroup(2, 1))
+        assert area == pytest.approx(2 * math.pi * 0.0127 * 1.2 * 0.0356, rel=1e-9)
+    finally:
+        gmsh.finalize()

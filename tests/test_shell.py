@@ -1,0 +1,116 @@
+"""The shell core against its references (coarse meshes; the full set runs in make validate)."""
+
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from tapecoil.config import load_config
+from tapecoil.geometry import FREE_END, ROOT, MeshResolution, StripGeometry, create_strip_mesh
+from tapecoil.shell import NaghdiShell, ShellMaterial, angles_from_director
+from tapecoil.verification import ROLLUP_MESHES, rollup, run_case, semicylinder, slit_plate
+
+
+def assert_passed(result):
+    failed = [(c.name, c.computed, c.reference, c.error) for c in result.checks if not c.passed]
+    assert not failed, failed
+
+
+def test_stress_free_reference():
+    assert_passed(run_case("stress-free", load_config(), "coarse"))
+
+
+def test_tape_linear_coarse():
+    result = run_case("tape-linear", load_config(), "coarse")
+    assert_passed(result)
+    # membrane action carries the beam bending of the curved section
+    assert result.info["energy_split"]["membrane"] > 0.99
+
+
+def test_full_integration_locks_where_psri_does_not():
+    from tapecoil.verification import tape_linear
+
+    cfg, res = load_config(), MeshResolution(4, 40)
+    full = tape_linear(cfg, res, technology="full").checks[1].computed
+    psri = tape_linear(cfg, res, technology="psri").checks[1].computed
+    assert full < 0.9 < 0.99 < psri < 1.02
+
+
+def test_rollup_two_turns_coarse():
+    result = rollup(ROLLUP_MESHES["coarse"], turns=2)
+    assert_passed(result)
+    assert len(result.checks) == 4  # half, one, one and a half and two turns
+
+
+def test_angles_round_trip():
+    """angles_from_director inverts the director map, continuing theta_1 through many turns."""
+    geom = StripGeometry(0.0151, 0.0356, 0.5)
+    xi = np.array([[0.1, 0.2, 0.3], [-0.015, 0.0, 0.012]])
+    frame = geom.frame(xi)
+    theta = np.array([[0.3, -0.7, 1.1], [13.0, -0.2, 7.5]])
+    c0, s0 = np.cos(theta[0]), np.sin(theta[0])
+    d = c0 * np.sin(theta[1]) * frame[0] - s0 * frame[1] + c0 * np.cos(theta[1]) * frame[2]
+    back = angles_from_director(d, frame, theta1_near=theta[1] + 0.5)
+    assert np.allclose(back, theta, atol=1e-12)
+
+
+def test_edge_motion_is_rigid():
+    """A rotated edge: displacement and director of the reference edge turned together."""
+    from tapecoil.boundary import EdgeMotion, rotation_matrix
+
+    cfg = load_config()
+    strip = create_strip_mesh(MPI.COMM_WORLD, StripGeometry.from_config(cfg), MeshResolution(4, 10))
+    model = NaghdiShell(strip, ShellMaterial(cfg.tape.E, cfg.tape.nu, cfg.tape.h))
+    axis_point = np.array([cfg.tape.L, 0.0, -0.02])
+    end = EdgeMotion(model, FREE_END, axis=np.array([0.0, 1.0, 0.0]), axis_point=axis_point)
+    angle = 2 * math.pi + 0.8  # more than a turn: theta_1 continues past 2 pi
+    end.set(angle, translation=(0.001, 0.0, 0.0))
+    Q = rotation_matrix([0, 1, 0], angle)
+    u_space = end.values[0].function_space
+    xi = u_space.tabulate_dof_coordinates()[:, :2].T
+    on_edge = np.isclose(xi[0], cfg.tape.L)
+    X = strip.geometry.phi0(xi[:, on_edge])
+    expected = Q @ (X - axis_point[:, None]) + axis_point[:, None] + np.array([[0.001], [0], [0]]) - X
+    u = end.values[0].x.array.reshape(-1, 3)[on_edge].T
+    assert np.allclose(u, expected, atol=1e-14)
+    theta = end.values[1].x.array.reshape(-1, 2)[
+        np.isclose(end.values[1].function_space.tabulate_dof_coordinates()[:, 0], cfg.tape.L)
+    ]
+    assert np.all(theta[:, 1] > 2 * math.pi)  # the unbounded angle, not wrapped
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("preset", ["default", "fine"])
+def test_rollup_refined(preset):
+    assert_passed(rollup(ROLLUP_MESHES[preset], turns=2))
+
+
+@pytest.mark.slow
+def test_semicylinder():
+    assert_passed(semicylinder())
+
+
+@pytest.mark.slow
+def test_slit_plate():
+    assert_passed(slit_plate())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("preset", ["default", "fine"])
+def test_tape_linear_refined(preset):
+    assert_passed(run_case("tape-linear", load_config(), preset))
+
+
+@pytest.mark.mpi
+def test_two_ranks_agree_with_one_on_a_nonlinear_case():
+    """Roll-up to one turn on all ranks and on each rank alone: tip positions agree to 1e-6."""
+    parallel = rollup(ROLLUP_MESHES["coarse"], turns=1, comm=MPI.COMM_WORLD)
+    serial = rollup(ROLLUP_MESHES["coarse"], turns=1, comm=MPI.COMM_SELF)
+    assert MPI.COMM_WORLD.size > 1
+    tips_p = np.array([t[1:] for t in parallel.info["tip"]])
+    tips_s = np.array([t[1:] for t in serial.info["tip"]])
+    assert tips_p.shape == tips_s.shape
+    scale = 12.0  # the strip length
+    assert np.max(np.abs(tips_p - tips_s)) / scale < 1e-6
+    assert parallel.info["newton_iterations"] == serial.info["newton_iterations"]
