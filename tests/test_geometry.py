@@ -83,7 +83,7 @@ def test_frame_matches_jacobian():
     assert np.allclose(np.einsum("in,in->n", t1, n0), 0) and np.allclose(np.einsum("in,in->n", t2, n0), 0)
     assert np.allclose(n0[:, 0], [0, -math.sin(-0.01 / 0.0151), math.cos(-0.01 / 0.0151)])
     eps = 1e-7
-    fd = (geom.phi0(xi + [[0], [eps]]) - geom.phi0(xi - [[0], [eps]])) / (2 * eps)
+    fd = (geom.phi0(xi + np.array([[0.0], [eps]])) - geom.phi0(xi - np.array([[0.0], [eps]]))) / (2 * eps)
     assert np.allclose(geom.jacobian(xi)[:, 1], fd, atol=1e-8)
 
 
@@ -96,7 +96,7 @@ def test_annulus():
     assert integrate(mesh, xi[1], ufl.dx(domain=mesh)) == pytest.approx(math.pi * (100 - 36), rel=1e-12)
     eps = 1e-7
     pts = np.array([[0.3, 5.0], [6.5, 9.0]])
-    fd = (geom.phi0(pts + [[eps], [0]]) - geom.phi0(pts - [[eps], [0]])) / (2 * eps)
+    fd = (geom.phi0(pts + np.array([[eps], [0.0]])) - geom.phi0(pts - np.array([[eps], [0.0]]))) / (2 * eps)
     assert np.allclose(geom.jacobian(pts)[:, 0], fd, atol=1e-6)
 
 

@@ -7,7 +7,7 @@ import pytest
 from mpi4py import MPI
 
 from tapecoil.config import load_config
-from tapecoil.geometry import FREE_END, ROOT, MeshResolution, StripGeometry, create_strip_mesh
+from tapecoil.geometry import FREE_END, MeshResolution, StripGeometry, create_strip_mesh
 from tapecoil.shell import NaghdiShell, ShellMaterial, angles_from_director
 from tapecoil.verification import ROLLUP_MESHES, rollup, run_case, semicylinder, slit_plate
 
