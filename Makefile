@@ -30,7 +30,7 @@ validate: setup
 	$(RUN) tools/run-tests slow
 
 bench: setup
-	$(RUN) python3 tools/bench.py --mesh $(MESH) --np $(NP)
+	$(RUN) mpirun -n $(NP) python3 tools/bench.py --mesh $(MESH)
 
 lint: setup
 	$(RUN) ruff check solver tests demos tools

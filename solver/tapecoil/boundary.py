@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import dolfinx
 import numpy as np
 
-from .shell import NaghdiShell, angles_from_director
+from .shell import NaghdiShell
 
 
 def rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -62,9 +62,7 @@ class EdgeMotion:
             return Q @ (X - c) + c + t - X
 
         def angles(x):
-            frame = geom.frame(x)
-            d = Q @ frame[2]
-            return angles_from_director(d, frame, theta1_near=angle)
+            return self.model.angles_of(Q @ geom.frame(x)[2], x, rotation_near=angle)
 
         self.values[0].interpolate(displacement)
         self.values[1].interpolate(angles)
@@ -74,3 +72,50 @@ class EdgeMotion:
 def clamp(model: NaghdiShell, tag: int) -> EdgeMotion:
     """A clamped edge: zero displacement and rotation."""
     return EdgeMotion(model, tag, axis=np.array([0.0, 1.0, 0.0]), axis_point=np.zeros(3))
+
+
+@dataclass
+class RigidSection:
+    """An edge turned rigidly by a prescribed rotation while free to translate.
+
+    The director is prescribed (Dirichlet, the rotated reference normal) and a penalty
+    stiffness/2 |d(u - u_Q)/d xi_2|^2 on the edge makes the edge's displacement differ from the
+    rigid rotation u_Q = (Q - I)(phi0 - c) by a constant only, i.e. by a translation: the edge
+    moves as a rigid body with the rotation Q and an unknown translation, so the loading is a
+    pure moment about ``axis``. u_Q is the finite element interpolant of the rigid rotation, so
+    that the constraint is met exactly by the discrete field (comparing with the exact rotated
+    arc would charge the interpolation error at the penalty stiffness). The penalty energy is
+    part of the total energy, whose derivative along the path is the moment.
+    """
+
+    model: NaghdiShell
+    tag: int
+    axis: np.ndarray
+    stiffness: float
+
+    def __post_init__(self):
+        import ufl
+
+        m = self.model
+        fdim = m.mesh.topology.dim - 1
+        facets = m.strip.facet_tags.find(self.tag)
+        V1, _ = m.W.sub(1).collapse()
+        dofs = dolfinx.fem.locate_dofs_topological((m.W.sub(1), V1), fdim, facets)
+        self.theta = dolfinx.fem.Function(V1)
+        self.bcs = [dolfinx.fem.dirichletbc(self.theta, dofs, m.W.sub(1))]
+        V0, _ = m.W.sub(0).collapse()
+        self.rigid_displacement = dolfinx.fem.Function(V0)
+        mismatch = ufl.grad(m.u - self.rigid_displacement)[:, 1]
+        self.energy = 0.5 * self.stiffness * ufl.dot(mismatch, mismatch) * m.ds(self.tag)
+        self.angle = 0.0
+
+    def set(self, angle: float) -> None:
+        geom = self.model.strip.geometry
+        Q = rotation_matrix(self.axis, angle)
+
+        def angles(x):
+            return self.model.angles_of(Q @ geom.frame(x)[2], x, rotation_near=angle)
+
+        self.theta.interpolate(angles)
+        self.rigid_displacement.interpolate(lambda x: (Q - np.eye(3)) @ geom.phi0(x))
+        self.angle = angle

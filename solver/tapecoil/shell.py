@@ -1,15 +1,22 @@
 """Nonlinear Naghdi (Reissner-Mindlin) shell on a flat parameter domain mapped to 3D.
 
 Kinematics. The reference mid-surface is phi0(xi) (geometry module) with covariant basis
-J0 = grad phi0, metric a0 = J0^T J0 and unit normal n0. An orthonormal frame (t1, t2, n0) with
-t1 along the first parameter direction carries the director
+J0 = grad phi0, metric a0 = J0^T J0 and unit normal n0. In an orthonormal director frame
+(e1, e2, e3) the director is
 
-    d(theta) = cos(theta_0) sin(theta_1) t1 - sin(theta_0) t2 + cos(theta_0) cos(theta_1) n0,
+    d = Lambda(theta_ref + theta)
+      = cos(t0) sin(t1) e1 - sin(t0) e2 + cos(t0) cos(t1) e3,   (t0, t1) = theta_ref + theta,
 
-a rotation by theta_1 about t2 after a rotation by theta_0 about t1. theta_1 is the rotation
-about the tape's width axis: coiling through many turns is an unbounded, regular theta_1. The
-map is singular only at |theta_0| = pi/2 (director along t2), which a tape never reaches: the
-flattening of the section turns the director by at most alpha/2 about t1.
+a rotation by t1 about e2 after a rotation by t0 about e1; theta_ref are the angles of n0, so
+theta = 0 is the reference state. The map is singular only where d = +-e2. Two frames:
+  - "global" (for tapes): e1, e2, e3 = x, y, z, with y the tape's width axis. theta_1 is the
+    rotation about the width axis, so coiling through many turns and folding are unbounded,
+    regular theta_1; the director never turns onto the width axis (it leans towards it by at
+    most alpha/2 on the curved section).
+  - "local" (the default, for general shells): e1 = t1 along the first parameter direction,
+    e3 = n0, e2 = n0 x t1, theta_ref = 0. A curved tape section turned by about pi about the
+    width axis meets this frame's singularity (the director at 45 degrees on the section
+    turns onto t2), which is why tapes use "global".
 
 Strains (covariant, with phi = phi0 + u, F = grad phi):
     membrane  e = (F^T F - a0) / 2
@@ -60,8 +67,11 @@ def _plane_stress(S, A, E: float, nu: float):
     return E / (1 - nu**2) * ((1 - nu) * ufl.dot(ufl.dot(A, S), A) + nu * ufl.tr(ufl.dot(A, S)) * A)
 
 
+FRAMES = ("local", "global")
+
+
 def director_from_angles(theta, frame):
-    """Director d(theta) in the frame (t1, t2, n0), see the module docstring."""
+    """Director d(theta) in the frame (e1, e2, e3), see the module docstring."""
     t1, t2, n0 = frame
     c0, s0 = ufl.cos(theta[0]), ufl.sin(theta[0])
     return c0 * ufl.sin(theta[1]) * t1 - s0 * t2 + c0 * ufl.cos(theta[1]) * n0
@@ -88,12 +98,22 @@ class NaghdiShell:
     displacement u (3 components, m) and the director angles theta (2 components, rad).
     """
 
-    def __init__(self, strip, material: ShellMaterial, technology: str = "psri", degree: int = 2):
+    def __init__(
+        self,
+        strip,
+        material: ShellMaterial,
+        technology: str = "psri",
+        degree: int = 2,
+        director_frame: str = "local",
+    ):
         import basix.ufl
         import dolfinx
 
         if technology not in TECHNOLOGIES:
             raise ValueError(f"technology must be one of {TECHNOLOGIES}, got {technology!r}")
+        if director_frame not in FRAMES:
+            raise ValueError(f"director_frame must be one of {FRAMES}, got {director_frame!r}")
+        self.director_frame = director_frame
         self.strip = strip
         self.mesh = mesh = strip.mesh
         self.material = material
@@ -127,15 +147,20 @@ class NaghdiShell:
         n0 = n0 / ufl.sqrt(ufl.dot(n0, n0))
         t1 = J0[:, 0] / ufl.sqrt(ufl.dot(J0[:, 0], J0[:, 0]))
         t2 = ufl.cross(n0, t1)
-        self.frame = (t1, t2, n0)
         self.n0 = n0
+        if director_frame == "local":
+            self.frame = (t1, t2, n0)
+            self.theta_ref = ufl.as_vector([0.0, 0.0])
+        else:
+            self.frame = tuple(ufl.as_vector(e) for e in np.eye(3))
+            self.theta_ref = ufl.as_vector([-ufl.asin(n0[1]), ufl.atan2(n0[0], n0[2])])
         self.a0 = J0.T * J0
         self.A = ufl.inv(self.a0)
         self.jacobian = ufl.sqrt(ufl.det(self.a0))
 
         fields = ufl.split(self.q)
         self.u, self.theta = fields[0], fields[1]
-        self.d = director_from_angles(self.theta, self.frame)
+        self.d = director_from_angles(self.theta_ref + self.theta, self.frame)
         self.phi = self.phi0 + self.u
         F = ufl.grad(self.phi)
         self.F = F
@@ -151,6 +176,7 @@ class NaghdiShell:
         psi_b = h**3 / 24 * ufl.inner(_plane_stress(k, A, E, nu), k)
         psi_s = 0.5 * SHEAR_CORRECTION * G * h * ufl.dot(g, ufl.dot(A, g))
 
+        self._psi_m, self._psi_b, self._psi_s = psi_m, psi_b, psi_s
         self.energy_bending = psi_b * dA * self.dx
         if technology == "full":
             self.energy_membrane = psi_m * dA * self.dx
@@ -166,6 +192,57 @@ class NaghdiShell:
             self.energy_shear = alpha * psi_s * dA * self.dx + (1 - alpha) * psi_s * dA * self.dx_reduced
 
     # -- state access --------------------------------------------------------------------
+    def director_frame_numpy(self, xi: np.ndarray):
+        """The director frame (e1, e2, e3) and reference angles (2, n) at parameter points."""
+        local = self.strip.geometry.frame(xi)
+        if self.director_frame == "local":
+            return local, np.zeros((2, xi.shape[1]))
+        n = xi.shape[1]
+        frame = tuple(np.tile(e[:, None], n) for e in np.eye(3))
+        n0 = local[2]
+        return frame, np.vstack([-np.arcsin(np.clip(n0[1], -1, 1)), np.arctan2(n0[0], n0[2])])
+
+    def angles_of(self, d: np.ndarray, xi: np.ndarray, rotation_near: float = 0.0) -> np.ndarray:
+        """Unknown angles theta (2, n) that give the directors d (3, n) at parameter points xi.
+
+        The unbounded theta_1 is taken on the branch nearest ``rotation_near`` [rad].
+        """
+        frame, ref = self.director_frame_numpy(xi)
+        return angles_from_director(d, frame, theta1_near=ref[1] + rotation_near) - ref
+
+    def energy_density(self):
+        """Strain energy per unit reference area (UFL), full expressions, for pointwise output."""
+        return self._psi_m + self._psi_b + self._psi_s
+
+    def curvatures(self):
+        """Curvatures (longitudinal, transverse) of the deformed mid-surface along xi_1 and xi_2.
+
+        kappa_ii = -phi_,i . d_,i / |phi_,i|^2 (no sum), the second fundamental form of the
+        director field; the reference strip has (0, 1/R), positive for the tape's own section.
+        """
+        F, grad_d = self.F, ufl.grad(self.d)
+        return tuple(-ufl.dot(F[:, i], grad_d[:, i]) / ufl.dot(F[:, i], F[:, i]) for i in (0, 1))
+
+    def relaxation(self, length_scale: float):
+        """Viscous term for pseudo-transient relaxation: (coefficient, previous state, form).
+
+        coefficient * [(u - u_prev).du + length_scale^2 (theta - theta_prev).dtheta] over the
+        reference area; with the coefficient 0 it vanishes.
+        """
+        import dolfinx
+
+        coefficient = dolfinx.fem.Constant(self.mesh, 0.0)
+        previous = dolfinx.fem.Function(self.W)
+        prev = ufl.split(previous)
+        du, dtheta = ufl.split(self.dq)[0], ufl.split(self.dq)[1]
+        form = (
+            coefficient
+            * (ufl.dot(self.u - prev[0], du) + length_scale**2 * ufl.dot(self.theta - prev[1], dtheta))
+            * self.jacobian
+            * self.dx
+        )
+        return coefficient, previous, form
+
     @property
     def strain_energy(self):
         """Total strain energy form, evaluated with the quadrature the solve uses."""

@@ -9,6 +9,7 @@ boundary values is driven onto them: the residual on a constrained dof is x - g.
 from __future__ import annotations
 
 import itertools
+import time
 from dataclasses import dataclass
 
 import dolfinx
@@ -110,6 +111,8 @@ class SNESSolver:
         self.A = dolfinx.fem.petsc.create_matrix(self.J_form)
         self.norms: list[float] = []
         self.point_forces: list[PointForce] = []
+        # cumulative wall times [s]: residual and Jacobian assembly, and whole solves
+        self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
 
         comm = V.mesh.comm
         self.snes = PETSc.SNES().create(comm)
@@ -137,6 +140,7 @@ class SNESSolver:
         qv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
 
     def _residual(self, _snes, x, b) -> None:
+        t0 = time.perf_counter()
         self._update_state(x)
         with b.localForm() as b_local:
             b_local.set(0.0)
@@ -147,18 +151,24 @@ class SNESSolver:
             for force in self.point_forces:
                 b_local.array[force.dofs] -= force.magnitude.value  # residual = internal - external
         dolfinx.fem.petsc.set_bc(b, self.bcs, self.q.x.petsc_vec, -1.0)
+        self.timings["residual"] += time.perf_counter() - t0
 
     def _jacobian(self, _snes, x, A, _P) -> None:
+        t0 = time.perf_counter()
         self._update_state(x)
         A.zeroEntries()
         compat.assemble_matrix(A, self.J_form, self.bcs)
         A.assemble()
+        self.timings["jacobian"] += time.perf_counter() - t0
 
     def solve(self) -> SolveResult:
         """Solve from the current state ``q``; on failure ``q`` holds the last iterate."""
         self.norms.clear()
         self.q.x.petsc_vec.copy(self.x)
+        t0 = time.perf_counter()
         self.snes.solve(None, self.x)
+        self.timings["solve"] += time.perf_counter() - t0
+        self.timings["iterations"] += self.snes.getIterationNumber()
         reason = self.snes.getConvergedReason()
         norm = self.snes.getFunctionNorm()
         converged = reason > 0 and np.isfinite(norm)
@@ -166,14 +176,14 @@ class SNESSolver:
             self._update_state(self.x)
         return SolveResult(converged, self.snes.getIterationNumber(), reason, float(norm))
 
-    def residual_vector(self):
-        """The residual at the current state without Dirichlet rows zeroed (reactions live there)."""
-        b = self.b.duplicate()
-        with b.localForm() as b_local:
-            b_local.set(0.0)
-        dolfinx.fem.petsc.assemble_vector(b, self.F_form)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return b
+    def timing_per_iteration(self) -> dict[str, float]:
+        """Mean wall time per Newton iteration [s]: assembly (residual + Jacobian) and the rest.
+
+        The rest is the linear solve (factorisation and substitution) plus SNES overhead.
+        """
+        its = max(self.timings["iterations"], 1)
+        assembly = self.timings["residual"] + self.timings["jacobian"]
+        return {"assembly": assembly / its, "linear_solve": (self.timings["solve"] - assembly) / its}
 
     def destroy(self) -> None:
         for obj in (self.snes, self.A, self.b, self.x):

@@ -52,6 +52,7 @@ class CaseResult:
     case: str
     checks: list[Check]
     info: dict = field(default_factory=dict)
+    model: object = field(default=None, repr=False)  # the solved NaghdiShell, for pictures
 
     @property
     def passed(self) -> bool:
@@ -115,7 +116,7 @@ def tape_linear(
     tp = config.tape
     geom = StripGeometry.from_config(config)
     strip = create_strip_mesh(comm, geom, resolution)
-    model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), technology)
+    model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), technology, director_frame="global")
     I = theory.arc_second_moment(tp.R, tp.alpha, tp.h)
     M = rotation * tp.E * I / tp.L
     beta = tp.alpha / 2
@@ -244,7 +245,7 @@ def stress_free(config: Config, resolution: MeshResolution, comm=MPI.COMM_WORLD)
     """
     tp = config.tape
     strip = create_strip_mesh(comm, StripGeometry.from_config(config), resolution)
-    model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h))
+    model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
     energy = energies(model)["total"]
     F0 = dolfinx.fem.form(model.residual())
     b = dolfinx.fem.petsc.assemble_vector(F0)
@@ -272,7 +273,7 @@ def stress_free(config: Config, resolution: MeshResolution, comm=MPI.COMM_WORLD)
     )
 
 
-CASES = ("stress-free", "tape-linear", "rollup", "semicylinder", "slit-plate")
+CASES = ("stress-free", "tape-linear", "rollup", "semicylinder", "slit-plate", "tape-fold")
 
 
 def run_case(name: str, config: Config, preset: str, comm=MPI.COMM_WORLD) -> CaseResult:
@@ -290,6 +291,8 @@ def run_case(name: str, config: Config, preset: str, comm=MPI.COMM_WORLD) -> Cas
         return semicylinder(SEMICYLINDER_MESHES[preset], comm=comm)
     if name == "slit-plate":
         return slit_plate(SLIT_PLATE_MESHES[preset], comm=comm)
+    if name == "tape-fold":
+        return tape_fold(config, tape_res, comm=comm)
     raise ValueError(f"unknown verification case {name!r} (known: {', '.join(CASES)})")
 
 
@@ -411,3 +414,141 @@ def slit_plate(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, co
 
 def _dofs(model: NaghdiShell) -> int:
     return model.W.dofmap.index_map.size_global * model.W.dofmap.index_map_bs
+
+
+def _cell_midpoint_values(model: NaghdiShell, expressions) -> np.ndarray:
+    """Values of scalar UFL expressions at the midpoints of all cells, gathered on every rank.
+
+    Returns an array (n_cells_global, 2 + len(expressions)): parameter midpoint, then values.
+    """
+    from . import compat
+
+    V0 = dolfinx.fem.functionspace(model.mesh, ("DG", 0))
+    n_owned = V0.dofmap.index_map.size_local
+    columns = [V0.tabulate_dof_coordinates()[:n_owned, 0], V0.tabulate_dof_coordinates()[:n_owned, 1]]
+    points = compat.interpolation_points(V0)
+    for expr in expressions:
+        f = dolfinx.fem.Function(V0)
+        f.interpolate(dolfinx.fem.Expression(expr, points))
+        columns.append(f.x.array[:n_owned].copy())
+    local = np.column_stack(columns)
+    return np.vstack(model.mesh.comm.allgather(local))
+
+
+def tape_fold(
+    config: Config,
+    resolution: MeshResolution | None = None,
+    length: float | None = None,
+    final_angle: float = math.pi,
+    comm=MPI.COMM_WORLD,
+    control=None,
+    on_step=None,
+    snapshots: str | None = None,
+) -> CaseResult:
+    """Opposite-sense folding of the benchmark tape by rotating its free end (Sec. 3 of issue 3).
+
+    The benchmark tape (or a ``length`` piece of it), clamped at the root; the free end turned rigidly
+    about the width axis (free to translate, so the load is a pure moment) in the opposite sense,
+    through the snap where the section flattens, until a localised fold has formed and grown to
+    ``final_angle``. Checks: the moment plateau after the snap against (1 + nu) D alpha (5 %), the
+    fold's longitudinal radius against R (10 %), its flattened section, and the energy per unit
+    area in the fold against mu (5 %). The tape must be long enough for the fold and its two
+    transition zones to stay clear of the ends: on 0.2 m the moment rose again beyond 2.5 rad.
+    ``snapshots``: a VTX path to write the shell at every step (ParaView).
+    """
+    from .boundary import RigidSection
+    from .config import SolverConfig
+    from .continuation import Continuation, Relaxation
+
+    tp = config.tape
+    length = length or tp.L
+    geom = StripGeometry(tp.R, tp.b, length)
+    res = resolution or MeshResolution(across=9, along=round(length / 0.004))
+    strip = create_strip_mesh(comm, geom, res)
+    model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
+    root = clamp(model, ROOT)
+    end = RigidSection(model, FREE_END, axis=np.array([0.0, 1.0, 0.0]), stiffness=100 * tp.E * tp.h)
+    h_e = length / res.along
+    c, previous, viscous = model.relaxation(length_scale=h_e)
+    total_energy = model.strain_energy + end.energy
+    F = ufl.derivative(total_energy, model.q, model.dq) + viscous
+    solver = SNESSolver(F, model.jacobian_form(F), model.q, root.bcs + end.bcs)
+    energy_form = dolfinx.fem.form(total_energy)
+    path = []
+    writer = None
+    if snapshots is not None:
+        from .output import ShellWriter
+
+        writer = ShellWriter(model, snapshots)
+        writer.write(0.0)
+
+    def record(step):
+        energy = comm.allreduce(dolfinx.fem.assemble_scalar(energy_form), op=MPI.SUM)
+        path.append((end.angle, energy, step.iterations, step.relaxed))
+        if writer is not None:
+            writer.write(end.angle)
+        if on_step is not None:
+            on_step(step, end.angle, energy)
+
+    D = tp.D
+    relax = Relaxation(c, previous, scale=10 * D / h_e**4)
+    control = control or SolverConfig(initial_step=0.01, max_step=0.02, min_step=1e-4, max_cutbacks=4)
+    t0 = time.perf_counter()
+    try:
+        Continuation(solver.solve, end.set, model.q, control, relaxation=relax, on_step=record).run(
+            0.0, final_angle
+        )
+    finally:
+        if writer is not None:
+            writer.close()
+    wall = time.perf_counter() - t0
+    timing = solver.timing_per_iteration()
+    solver.destroy()
+
+    phi, energy = np.array([p[0] for p in path]), np.array([p[1] for p in path])
+    moment = np.gradient(energy, phi)
+    snap = next((i for i, p in enumerate(path) if p[3]), None)
+    M_star = theory.fold_moment(D, tp.nu, tp.alpha)
+    # plateau: the secant slope of the energy over the second half of the post-snap path
+    if snap is not None:
+        first = snap + (len(phi) - snap) // 2
+        plateau = (energy[-1] - energy[first]) / (phi[-1] - phi[first])
+    else:
+        plateau = float("nan")
+
+    kx, ky = model.curvatures()
+    cells = _cell_midpoint_values(model, [kx, ky, model.energy_density()])
+    inner = np.abs(cells[:, 1]) <= 0.3 * tp.b  # inner 60 % of the width
+    # opposite sense: the fold's longitudinal curvature is negative (the section's own is +1/R)
+    bend = -cells[:, 2]
+    fold = inner & (bend > 0.7 * np.max(bend[inner]))
+    fold_radius = float(np.median(1.0 / bend[fold])) if fold.any() else float("nan")
+    transverse = float(np.median(np.abs(cells[fold, 3]))) * tp.R if fold.any() else float("nan")
+    w_fold = float(np.median(cells[fold, 4])) if fold.any() else float("nan")
+    return CaseResult(
+        "tape-fold",
+        [
+            Check("moment plateau / (1 + nu) D alpha", plateau / M_star, 1.0, 0.05),
+            Check("fold radius / R", fold_radius / tp.R, 1.0, 0.10),
+            Check("transverse curvature in the fold x R", transverse, 0.0, 0.10, True),
+            Check("energy density in the fold / mu", w_fold / tp.mu, 1.0, 0.05),
+        ],
+        {
+            "mesh": f"{res.along} x {res.across}",
+            "dofs": _dofs(model),
+            "length": length,
+            "steps": len(path),
+            "snap_angle": float(phi[snap]) if snap is not None else None,
+            "peak_moment": float(np.max(moment)),
+            "plateau_moment": plateau,
+            "fold_cells": int(fold.sum()),
+            "fold_x_range": [float(cells[fold, 0].min()), float(cells[fold, 0].max())]
+            if fold.any()
+            else None,
+            "path": [[float(a), float(m)] for a, m in zip(phi, moment, strict=True)],
+            "newton_iterations": [p[2] for p in path],
+            "wall_time": wall,
+            "time_per_iteration": timing,
+        },
+        model=model,
+    )

@@ -1,0 +1,55 @@
+"""Shell-core benchmark: the benchmark tape folded through the snap (make bench).
+
+Runs the tape-fold case to --angle (default 1 rad, past the snap) on a mesh preset and prints
+DOFs, load steps, Newton iterations per step, the largest converged step and the mean time
+per Newton iteration (assembly and linear solve), with the machine and the MPI size.
+Run under mpirun for parallel figures: `make bench MESH=default NP=2`.
+"""
+
+import argparse
+import json
+import platform
+import time
+
+import numpy as np
+from mpi4py import MPI
+
+from tapecoil.config import MeshConfig, load_config
+from tapecoil.geometry import MeshResolution
+from tapecoil.verification import tape_fold
+
+parser = argparse.ArgumentParser(description=__doc__)
+parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
+parser.add_argument("--angle", type=float, default=1.0, help="final end rotation [rad]")
+parser.add_argument("--json", action="store_true")
+args = parser.parse_args()
+
+config = load_config()
+res = MeshResolution.from_config(MeshConfig(preset=args.mesh), config.tape.L)
+t0 = time.perf_counter()
+result = tape_fold(config, res, final_angle=args.angle)
+wall = time.perf_counter() - t0
+info = result.info
+its = np.array(info["newton_iterations"])
+angles = np.array([p[0] for p in info["path"]])
+summary = {
+    "case": f"tape fold to {args.angle:g} rad",
+    "mesh": f"{args.mesh} ({info['mesh']})",
+    "ranks": MPI.COMM_WORLD.size,
+    "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
+    "dofs": info["dofs"],
+    "steps": info["steps"],
+    "newton_iterations_per_step_mean": float(its.mean()),
+    "newton_iterations_per_step_max": int(its.max()),
+    "largest_converged_step_rad": float(np.max(np.diff(np.concatenate([[0.0], angles])))),
+    "snap_angle": info["snap_angle"],
+    "time_per_iteration_assembly_s": info["time_per_iteration"]["assembly"],
+    "time_per_iteration_linear_solve_s": info["time_per_iteration"]["linear_solve"],
+    "wall_time_s": wall,
+}
+if MPI.COMM_WORLD.rank == 0:
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        for key, value in summary.items():
+            print(f"{key:<36} {value:.4g}" if isinstance(value, float) else f"{key:<36} {value}")
