@@ -64,9 +64,7 @@ if rank0:
     for check in result.checks:
         error = f"{check.error:.3g}" if check.absolute else f"{check.error:.2%}"
         verdict = "PASS" if check.passed else "FAIL"
-        print(
-            f"{check.name:<40} {check.computed:10.4g}  (reference {check.reference:g}, error {error}) {verdict}"
-        )
+        print(f"{check.name:<40} {check.computed:10.4g}  (ref. {check.reference:g}, error {error}) {verdict}")
     info = {k: v for k, v in result.info.items() if k != "path"}
     (out / "summary.json").write_text(
         json.dumps(
