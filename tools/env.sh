@@ -121,8 +121,10 @@ in_root() {
   ' sh "$ROOT" "$PROJECT" "${envargs[@]}" /bin/sh -c 'cd "$1" || exit 1; shift; exec "$@"' sh "$cwd" "$@"
 }
 
+# Snapshot mirrors serve Release files past their Valid-Until date (sid's expire within
+# days); the archive signatures are still checked.
 root_apt() {
-  in_root / /bin/sh -c "DEBIAN_FRONTEND=noninteractive apt-get $*"
+  in_root / /bin/sh -c "DEBIAN_FRONTEND=noninteractive apt-get -o Acquire::Check-Valid-Until=false $*"
 }
 
 setup_root() {

@@ -177,19 +177,33 @@ class NaghdiShell:
         psi_s = 0.5 * SHEAR_CORRECTION * G * h * ufl.dot(g, ufl.dot(A, g))
 
         self._psi_m, self._psi_b, self._psi_s = psi_m, psi_b, psi_s
-        self.energy_bending = psi_b * dA * self.dx
         if technology == "full":
-            self.energy_membrane = psi_m * dA * self.dx
-            self.energy_shear = psi_s * dA * self.dx
+            self._alpha = None
         else:
             # physical element size: reference cell [0, 1]^2 (or the unit triangle) times the
             # area scale sqrt(det a0) of the map to 3D
             area = abs(ufl.JacobianDeterminant(mesh)) * dA
             if mesh.topology.cell_name() != "quadrilateral":
                 area = area / 2
-            alpha = ufl.min_value(h**2 / area, 1.0)
-            self.energy_membrane = alpha * psi_m * dA * self.dx + (1 - alpha) * psi_m * dA * self.dx_reduced
-            self.energy_shear = alpha * psi_s * dA * self.dx + (1 - alpha) * psi_s * dA * self.dx_reduced
+            self._alpha = ufl.min_value(h**2 / area, 1.0)
+        self.energy_membrane, self.energy_bending, self.energy_shear = self.energy_forms()
+
+    def energy_forms(self, weight=1.0):
+        """(membrane, bending, shear) energy forms, each integrand times ``weight``.
+
+        Exactly the quadrature rules of the solve (PSRI split included), so that a weighted
+        energy (a region's, say) is part of the energy that is minimised.
+        """
+        dA = self.jacobian
+        bending = weight * self._psi_b * dA * self.dx
+        if self._alpha is None:
+            return weight * self._psi_m * dA * self.dx, bending, weight * self._psi_s * dA * self.dx
+        a = self._alpha
+
+        def split(psi):
+            return a * weight * psi * dA * self.dx + (1 - a) * weight * psi * dA * self.dx_reduced
+
+        return split(self._psi_m), bending, split(self._psi_s)
 
     # -- state access --------------------------------------------------------------------
     def director_frame_numpy(self, xi: np.ndarray):
@@ -209,10 +223,6 @@ class NaghdiShell:
         """
         frame, ref = self.director_frame_numpy(xi)
         return angles_from_director(d, frame, theta1_near=ref[1] + rotation_near) - ref
-
-    def energy_density(self):
-        """Strain energy per unit reference area (UFL), full expressions, for pointwise output."""
-        return self._psi_m + self._psi_b + self._psi_s
 
     def curvatures(self):
         """Curvatures (longitudinal, transverse) of the deformed mid-surface along xi_1 and xi_2.

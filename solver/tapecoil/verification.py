@@ -416,10 +416,11 @@ def _dofs(model: NaghdiShell) -> int:
     return model.W.dofmap.index_map.size_global * model.W.dofmap.index_map_bs
 
 
-def _cell_midpoint_values(model: NaghdiShell, expressions) -> np.ndarray:
-    """Values of scalar UFL expressions at the midpoints of all cells, gathered on every rank.
+def _cell_midpoint_values(model: NaghdiShell, expressions):
+    """Values of scalar UFL expressions at the midpoints of this rank's cells.
 
-    Returns an array (n_cells_global, 2 + len(expressions)): parameter midpoint, then values.
+    Returns the DG0 space and an array (n_owned_cells, 2 + len(expressions)): parameter
+    midpoint, then values; row i is the space's local dof i.
     """
     from . import compat
 
@@ -431,8 +432,27 @@ def _cell_midpoint_values(model: NaghdiShell, expressions) -> np.ndarray:
         f = dolfinx.fem.Function(V0)
         f.interpolate(dolfinx.fem.Expression(expr, points))
         columns.append(f.x.array[:n_owned].copy())
-    local = np.column_stack(columns)
-    return np.vstack(model.mesh.comm.allgather(local))
+    return V0, np.column_stack(columns)
+
+
+def _region_energy_density(model: NaghdiShell, V0, mask: np.ndarray) -> float:
+    """Strain energy per unit area [J/m^2] over the owned cells flagged in ``mask`` (collective).
+
+    The energy forms of the solve (same quadrature, PSRI included), weighted by the region's
+    indicator, divided by the region's area.
+    """
+    chi = dolfinx.fem.Function(V0)
+    chi.x.array[: len(mask)] = mask.astype(float)
+    chi.x.scatter_forward()
+    comm = model.mesh.comm
+    energy = sum(
+        comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(f)), op=MPI.SUM)
+        for f in model.energy_forms(chi)
+    )
+    area = comm.allreduce(
+        dolfinx.fem.assemble_scalar(dolfinx.fem.form(chi * model.jacobian * model.dx)), op=MPI.SUM
+    )
+    return energy / area
 
 
 def tape_fold(
@@ -517,14 +537,17 @@ def tape_fold(
         plateau = float("nan")
 
     kx, ky = model.curvatures()
-    cells = _cell_midpoint_values(model, [kx, ky, model.energy_density()])
-    inner = np.abs(cells[:, 1]) <= 0.3 * tp.b  # inner 60 % of the width
+    V0, local = _cell_midpoint_values(model, [kx, ky])
+    cells = np.vstack(comm.allgather(local))
     # opposite sense: the fold's longitudinal curvature is negative (the section's own is +1/R)
+    inner = np.abs(cells[:, 1]) <= 0.3 * tp.b  # inner 60 % of the width
     bend = -cells[:, 2]
-    fold = inner & (bend > 0.7 * np.max(bend[inner]))
+    threshold = 0.7 * np.max(bend[inner])
+    fold = inner & (bend > threshold)
+    local_fold = (np.abs(local[:, 1]) <= 0.3 * tp.b) & (-local[:, 2] > threshold)
     fold_radius = float(np.median(1.0 / bend[fold])) if fold.any() else float("nan")
     transverse = float(np.median(np.abs(cells[fold, 3]))) * tp.R if fold.any() else float("nan")
-    w_fold = float(np.median(cells[fold, 4])) if fold.any() else float("nan")
+    w_fold = _region_energy_density(model, V0, local_fold) if fold.any() else float("nan")
     return CaseResult(
         "tape-fold",
         [
