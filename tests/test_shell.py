@@ -152,3 +152,29 @@ def test_global_director_frame_turns_the_curved_section_through_pi():
         )
         assert np.allclose(rebuilt, d, atol=1e-13)
         assert np.allclose(theta[1], angle, atol=1e-12)  # a turn about the width axis is theta_1 alone
+
+
+def test_continuation_stops_with_the_last_converged_state():
+    """Cut-backs exhausted: a clear error naming the last converged load, that state kept."""
+    from types import SimpleNamespace
+
+    from tapecoil.config import SolverConfig
+    from tapecoil.continuation import Continuation, ContinuationError
+
+    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(3)))
+    load = {"t": 0.0}
+
+    def solve():
+        ok = load["t"] <= 0.5
+        state.x.array[:] = load["t"] if ok else np.nan  # a failed solve leaves garbage behind
+        return SimpleNamespace(converged=ok, iterations=3)
+
+    control = SolverConfig(initial_step=0.2, max_step=0.2, max_cutbacks=3)
+    run = Continuation(solve, lambda t: load.update(t=t), state, control)
+    with pytest.raises(ContinuationError, match="last converged load 0.5$") as info:
+        run.run(0.0, 1.0)
+    assert info.value.load == pytest.approx(0.5)
+    assert np.all(state.x.array == pytest.approx(0.5))  # the last converged state, no NaN
+    assert load["t"] == pytest.approx(0.5)
+    # 0.6 fails, the halved step reaches 0.5; beyond it three cut-backs fail and it stops
+    assert [round(s.load, 6) for s in run.history] == [0.2, 0.4, 0.5]

@@ -107,7 +107,7 @@ in_root() {
     HOME=/root LANG=C.UTF-8 "TERM=${TERM:-dumb}" "PATH=$VENV/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin"
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg PYVISTA_OFF_SCREEN=true
     OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl=self,vader
-    PRTE_MCA_rmaps_default_mapping_policy=:oversubscribe OMPI_MCA_rmaps_base_oversubscribe=1
+    OMPI_MCA_rmaps_base_oversubscribe=1
     "TAPECOIL_IN_ENV=$SUITE"
   )
   for var in $(compgen -e); do

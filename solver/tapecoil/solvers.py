@@ -185,6 +185,21 @@ class SNESSolver:
         assembly = self.timings["residual"] + self.timings["jacobian"]
         return {"assembly": assembly / its, "linear_solve": (self.timings["solve"] - assembly) / its}
 
+    @classmethod
+    def from_config(cls, F, J, q, bcs, solver_config, **overrides):
+        """A solver with the tolerances and PETSc options of a :class:`SolverConfig`."""
+        options = {**solver_config.petsc_options, **overrides}
+        return cls(
+            F,
+            J,
+            q,
+            bcs,
+            options=options,
+            rtol=solver_config.rtol,
+            atol=solver_config.atol,
+            max_it=solver_config.max_newton,
+        )
+
     def destroy(self) -> None:
         for obj in (self.snes, self.A, self.b, self.x):
             obj.destroy()

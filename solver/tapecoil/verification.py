@@ -5,6 +5,7 @@ The CLI (``tapecoil verify``) and the tests run the same functions.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -129,7 +130,9 @@ def tape_linear(
     root = clamp(model, ROOT)
     F = model.residual(work)
     # one exact linear solve about the reference state: q = -J(0)^-1 F(0)
-    solver = SNESSolver(F, model.jacobian_form(F), model.q, root.bcs, options={"snes_type": "ksponly"})
+    solver = SNESSolver.from_config(
+        F, model.jacobian_form(F), model.q, root.bcs, config.solver, snes_type="ksponly"
+    )
     t0 = time.perf_counter()
     result = solver.solve()
     wall = time.perf_counter() - t0
@@ -492,7 +495,12 @@ def tape_fold(
     c, previous, viscous = model.relaxation(length_scale=h_e)
     total_energy = model.strain_energy + end.energy
     F = ufl.derivative(total_energy, model.q, model.dq) + viscous
-    solver = SNESSolver(F, model.jacobian_form(F), model.q, root.bcs + end.bcs)
+    # small steps towards the snap, and few cut-backs before relaxing through it; tolerances and
+    # PETSc options from the configuration
+    control = control or dataclasses.replace(
+        config.solver, initial_step=0.01, max_step=0.02, min_step=1e-4, max_cutbacks=4
+    )
+    solver = SNESSolver.from_config(F, model.jacobian_form(F), model.q, root.bcs + end.bcs, control)
     energy_form = dolfinx.fem.form(total_energy)
     path = []
     writer = None
@@ -512,7 +520,6 @@ def tape_fold(
 
     D = tp.D
     relax = Relaxation(c, previous, scale=10 * D / h_e**4)
-    control = control or SolverConfig(initial_step=0.01, max_step=0.02, min_step=1e-4, max_cutbacks=4)
     t0 = time.perf_counter()
     try:
         Continuation(solver.solve, end.set, model.q, control, relaxation=relax, on_step=record).run(
