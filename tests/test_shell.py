@@ -171,7 +171,7 @@ def test_continuation_stops_with_the_last_converged_state():
 
     control = SolverConfig(initial_step=0.2, max_step=0.2, max_cutbacks=3)
     run = Continuation(solve, lambda t: load.update(t=t), state, control)
-    with pytest.raises(ContinuationError, match="last converged load 0.5$") as info:
+    with pytest.raises(ContinuationError, match=r"last converged load 0\.5$") as info:
         run.run(0.0, 1.0)
     assert info.value.load == pytest.approx(0.5)
     assert np.all(state.x.array == pytest.approx(0.5))  # the last converged state, no NaN

@@ -480,7 +480,6 @@ def tape_fold(
     ``snapshots``: a VTX path to write the shell at every step (ParaView).
     """
     from .boundary import RigidSection
-    from .config import SolverConfig
     from .continuation import Continuation, Relaxation
 
     tp = config.tape
