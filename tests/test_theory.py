@@ -191,3 +191,16 @@ def test_predictions_cover_the_issue_numbers(cfg):
     assert close(p["coil_radius"].value, 13.27e-3)
     assert close(p["stored_energy"].value, 1.32)
     assert all(math.isfinite(x.value) for x in p.values())
+
+
+@pytest.mark.parametrize(("hub_over_R", "source"), [(0.84, "Eq. 2.6"), (2.0, None), (4.0, "Eq. 2.9")])
+def test_predictions_pick_the_tension_law_of_the_regime(hub_over_R, source):
+    from tapecoil.config import config_from_dict
+
+    cfg = config_from_dict({"hub": {"radius": hub_over_R * 0.0151}})
+    p = {x.key: x for x in th.predictions(cfg)}
+    if source is None:
+        assert "coiling_tension" not in p  # loss of uniqueness: no single tension
+    else:
+        assert p["coiling_tension"].source == source
+        assert p["coiling_tension"].value > 0

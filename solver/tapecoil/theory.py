@@ -399,26 +399,14 @@ def predictions(config: Config) -> list[Prediction]:
             "section 5",
         ),
     ]
-    if regime == "bending":
-        out.append(
-            P(
-                "coiling_tension",
-                "coiling tension",
-                coiling_tension_bending(D, tp.alpha, tp.R, r_hub),
-                "N",
-                "Eq. 2.6",
-            )
-        )
-    elif regime == "tension":
-        out.append(
-            P(
-                "coiling_tension",
-                "coiling tension",
-                coiling_tension_tension_dominated(D, tp.alpha, tp.R, r_hub),
-                "N",
-                "Eq. 2.9",
-            )
-        )
+    # in the non-unique regime (1 < r_c/R < 3.424) neither law applies
+    tension_laws = {
+        "bending": (coiling_tension_bending, "Eq. 2.6"),
+        "tension": (coiling_tension_tension_dominated, "Eq. 2.9"),
+    }
+    if regime in tension_laws:
+        law, source = tension_laws[regime]
+        out.append(P("coiling_tension", "coiling tension", law(D, tp.alpha, tp.R, r_hub), "N", source))
     out += [
         P("T_deploy_hub", "deployment time, r = r_hub", deployment_time(k_hub), "s", "Eq. 2.23"),
         P("t90_hub", "time to lambda = 0.9, r = r_hub", deployment_time(k_hub, 0.9), "s", "Eq. 2.20"),
