@@ -65,7 +65,7 @@ if rank0:
         error = f"{check.error:.3g}" if check.absolute else f"{check.error:.2%}"
         verdict = "PASS" if check.passed else "FAIL"
         print(f"{check.name:<40} {check.computed:10.4g}  (ref. {check.reference:g}, error {error}) {verdict}")
-    info = {k: v for k, v in result.info.items() if k != "path"}
+    info = result.info
     (out / "summary.json").write_text(
         json.dumps(
             {
@@ -86,18 +86,24 @@ if rank0:
 if rank0:
     path = np.array(result.info["path"])
     M_star = theory.fold_moment(tape.D, tape.nu, tape.alpha)
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    ax.plot(path[:, 0], path[:, 1] * 1e3, ".-", ms=3, label="tapecoil (shell, dE/dphi)")
-    ax.axhline(M_star * 1e3, color="k", ls="--", label=f"(1 + nu) D alpha = {M_star * 1e3:.1f} N mm")
-    if result.info["snap_angle"] is not None:
-        ax.axvline(result.info["snap_angle"], color="0.6", lw=0.8, label="snap")
-    ax.set(
-        xlabel="end rotation phi [rad]",
-        ylabel="end moment M [N mm]",
-        yscale="log",
-        title=f"Opposite-sense folding of the benchmark tape ({result.info['mesh']} elements)",
-    )
-    ax.legend()
+    snap = result.info["snap_angle"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.0))
+    for ax, zoom in zip(axes, (False, True), strict=True):
+        ax.plot(path[:, 0], path[:, 1] * 1e3, ".-", ms=3, label="tapecoil shell, dE/dphi")
+        ax.axhline(M_star * 1e3, color="k", ls="--", label=f"(1 + nu) D alpha = {M_star * 1e3:.1f} N mm")
+        if snap is not None:
+            ax.axvline(snap, color="0.6", lw=0.8, label=f"snap at {snap:.3f} rad")
+        ax.set(xlabel="end rotation phi [rad]", ylabel="end moment M [N mm]")
+        if zoom:
+            ax.set(
+                ylim=(0, 2 * M_star * 1e3),
+                xlim=(snap or 0, path[-1, 0]),
+                title="after the snap: the fold grows",
+            )
+        else:
+            ax.set(title="whole path")
+            ax.legend(fontsize=8)
+    fig.suptitle(f"Opposite-sense folding of the benchmark tape ({result.info['mesh']} elements)")
     fig.tight_layout()
     fig.savefig(out / "moment_rotation.png", dpi=130)
     print(f"written: {out}/fold.bp, moment_rotation.png, summary.json")

@@ -532,8 +532,15 @@ def tape_fold(
     solver.destroy()
 
     phi, energy = np.array([p[0] for p in path]), np.array([p[1] for p in path])
-    moment = np.gradient(energy, phi)
     snap = next((i for i, p in enumerate(path) if p[3]), None)
+    # M = dE/dphi on each branch: the energy drops across the snap, which has no derivative
+    branches = [slice(0, snap), slice(snap, None)] if snap is not None else [slice(None)]
+    moment = np.concatenate(
+        [
+            np.gradient(energy[b], phi[b]) if len(phi[b]) > 1 else np.full(len(phi[b]), np.nan)
+            for b in branches
+        ]
+    )
     M_star = theory.fold_moment(D, tp.nu, tp.alpha)
     # plateau: the secant slope of the energy over the second half of the post-snap path
     if snap is not None:
@@ -568,7 +575,7 @@ def tape_fold(
             "length": length,
             "steps": len(path),
             "snap_angle": float(phi[snap]) if snap is not None else None,
-            "peak_moment": float(np.max(moment)),
+            "peak_moment": float(np.nanmax(moment)),
             "plateau_moment": plateau,
             "fold_cells": int(fold.sum()),
             "fold_x_range": [float(cells[fold, 0].min()), float(cells[fold, 0].max())]
