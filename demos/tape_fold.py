@@ -106,4 +106,17 @@ if rank0:
     fig.suptitle(f"Opposite-sense folding of the benchmark tape ({result.info['mesh']} elements)")
     fig.tight_layout()
     fig.savefig(out / "moment_rotation.png", dpi=130)
-    print(f"written: {out}/fold.bp, moment_rotation.png, summary.json")
+    # the folded tape in 3D, coloured by its longitudinal curvature (times R: -1 in the fold)
+    from tapecoil.render import render_shell
+
+    if MPI.COMM_WORLD.size == 1:
+        kappa_long, _ = result.model.curvatures()
+        render_shell(
+            result.model,
+            out / "fold.png",
+            scalar=kappa_long * tape.R,
+            name="kappa_long R",
+            title=f"end turned by {result.info['path'][-1][0]:.2f} rad",
+            camera=((0.0, -1.0, 0.0),),
+        )
+    print(f"written: {out}/fold.bp, moment_rotation.png, fold.png, summary.json")

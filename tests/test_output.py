@@ -41,3 +41,17 @@ def test_csv(tmp_path):
     assert (tmp_path / "h.csv").read_text().splitlines() == ["step,energy", "1,0.5", "2,0.25"]
     with pytest.raises(NonFiniteStateError):
         write_csv(tmp_path / "n.csv", [{"energy": float("nan")}])
+
+
+def test_render_is_a_picture_of_the_shell(model, tmp_path):
+    """The off-screen render shows the shell: not a blank window."""
+    import numpy as np
+    from PIL import Image
+
+    from tapecoil.render import render_shell
+
+    path = render_shell(model, tmp_path / "shell.png", scalar=model.curvatures()[1], name="kappa_trans")
+    image = np.asarray(Image.open(path).convert("L"), dtype=float)
+    assert image.shape[0] > 100 and image.shape[1] > 100
+    assert (image < 250).mean() > 0.01  # enough non-white pixels: the shell is drawn
+    assert image.std() > 5

@@ -319,8 +319,8 @@ def build_hub_gmsh(r_hub: float, h: float, width: float, size: float) -> None:
     import gmsh
 
     occ = gmsh.model.occ
-    axis_z = -(r_hub + h / 2)
-    cyl = occ.addCylinder(0, -0.6 * width, axis_z, 0, 1.2 * width, 0, r_hub)
+    axis = hub_axis_point(r_hub, h)
+    cyl = occ.addCylinder(axis[0], -0.6 * width, axis[2], 0, 1.2 * width, 0, r_hub)
     occ.synchronize()
     lateral = [
         tag
