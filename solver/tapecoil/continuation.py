@@ -127,7 +127,7 @@ class Continuation:
             t0 = time.perf_counter()
             self.set_load(target)
             result = self.solve()
-            relaxed = False
+            iterations, relaxed = result.iterations, False
             if not result.converged:
                 self.state.x.array[:] = saved
                 cutbacks += 1
@@ -141,7 +141,7 @@ class Continuation:
                         f"(step {abs(dt / ctl.cutback):.3g}); last converged load {t:.6g}",
                         t,
                     )
-                ok, its = self._relax(target)
+                ok, iterations = self._relax(target)
                 if not ok:
                     self.state.x.array[:] = saved
                     self.set_load(t)
@@ -150,11 +150,8 @@ class Continuation:
                         f"last converged load {t:.6g}",
                         t,
                     )
-                result = type("Relaxed", (), {"iterations": its})()
                 relaxed = True
-            record = StepRecord(
-                target, target - t, result.iterations, cutbacks, relaxed, time.perf_counter() - t0
-            )
+            record = StepRecord(target, target - t, iterations, cutbacks, relaxed, time.perf_counter() - t0)
             self.history.append(record)
             if self.on_step is not None:
                 self.on_step(record)
@@ -162,7 +159,7 @@ class Continuation:
                 marks.pop(0)
             t = target
             saved[:] = self.state.x.array
-            if result.iterations <= self.easy_iterations and cutbacks == 0:
+            if iterations <= self.easy_iterations and cutbacks == 0:
                 dt *= ctl.grow
             dt = math.copysign(min(abs(dt), ctl.max_step * abs(span)), span)
             if relaxed:  # restart gently after a snap
