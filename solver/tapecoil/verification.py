@@ -532,7 +532,9 @@ def tape_fold(
     solver.destroy()
 
     phi, energy = np.array([p[0] for p in path]), np.array([p[1] for p in path])
-    snap = next((i for i, p in enumerate(path) if p[3]), None)
+    # the snap: under rotation control the energy can only fall through a dynamic jump (with or
+    # without relaxation, the first step whose energy is below its predecessor's)
+    snap = next((i for i in range(1, len(path)) if energy[i] < energy[i - 1] or path[i][3]), None)
     # M = dE/dphi on each branch: the energy drops across the snap, which has no derivative
     branches = [slice(0, snap), slice(snap, None)] if snap is not None else [slice(None)]
     moment = np.concatenate(
