@@ -39,9 +39,11 @@ lint: setup
 shell: setup
 	@$(ENV) shell
 
+# CMD reaches the recipe through the environment, so any quoting inside it survives.
+run: export CMD = $(value CMD)
 run: setup
-	@test -n '$(CMD)' || { echo 'usage: make run CMD="tapecoil theory"' >&2; exit 2; }
-	@$(RUN) /bin/sh -c '$(CMD)'
+	@test -n "$$CMD" || { echo 'usage: make run CMD="tapecoil theory"' >&2; exit 2; }
+	@$(RUN) /bin/sh -c "$$CMD"
 
 info:
 	@$(ENV) info
