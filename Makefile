@@ -39,7 +39,8 @@ lint: setup
 shell: setup
 	@$(ENV) shell
 
-# CMD reaches the recipe through the environment, so any quoting inside it survives.
+# CMD reaches the recipe through the environment, so quotes inside it survive (as in any make
+# argument, a literal dollar is written $$: make run CMD="echo $$HOME").
 run: export CMD = $(value CMD)
 run: setup
 	@test -n "$$CMD" || { echo 'usage: make run CMD="tapecoil theory"' >&2; exit 2; }
