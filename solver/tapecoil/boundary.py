@@ -22,6 +22,21 @@ def rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
 
 
+def facet_condition(model: NaghdiShell, sub: tuple[int, ...], facets: np.ndarray):
+    """A Dirichlet condition on the (sub-)space ``W.sub(i).sub(j)...`` over ``facets``.
+
+    Returns (value, bc): the prescribed values live in the collapsed-space Function ``value``
+    (zero until set), so that load stepping can change them in place.
+    """
+    space = model.W
+    for i in sub:
+        space = space.sub(i)
+    collapsed, _ = space.collapse()
+    dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), model.mesh.topology.dim - 1, facets)
+    value = dolfinx.fem.Function(collapsed)
+    return value, dolfinx.fem.dirichletbc(value, dofs, space)
+
+
 @dataclass
 class EdgeMotion:
     """Dirichlet conditions holding the edge ``tag`` to a rigid motion of the reference edge.
@@ -37,17 +52,10 @@ class EdgeMotion:
     axis_point: np.ndarray
 
     def __post_init__(self):
-        m = self.model
-        fdim = m.mesh.topology.dim - 1
-        facets = m.strip.facet_tags.find(self.tag)
-        self.bcs = []
-        self.values = []
-        for i in (0, 1):
-            Vi, _ = m.W.sub(i).collapse()
-            dofs = dolfinx.fem.locate_dofs_topological((m.W.sub(i), Vi), fdim, facets)
-            value = dolfinx.fem.Function(Vi)
-            self.values.append(value)
-            self.bcs.append(dolfinx.fem.dirichletbc(value, dofs, m.W.sub(i)))
+        facets = self.model.strip.facet_tags.find(self.tag)
+        conditions = [facet_condition(self.model, (i,), facets) for i in (0, 1)]
+        self.values = [value for value, _ in conditions]
+        self.bcs = [bc for _, bc in conditions]
         self.angle = 0.0
 
     def set(self, angle: float, translation=(0.0, 0.0, 0.0)) -> None:
@@ -97,12 +105,8 @@ class RigidSection:
         import ufl
 
         m = self.model
-        fdim = m.mesh.topology.dim - 1
-        facets = m.strip.facet_tags.find(self.tag)
-        V1, _ = m.W.sub(1).collapse()
-        dofs = dolfinx.fem.locate_dofs_topological((m.W.sub(1), V1), fdim, facets)
-        self.theta = dolfinx.fem.Function(V1)
-        self.bcs = [dolfinx.fem.dirichletbc(self.theta, dofs, m.W.sub(1))]
+        self.theta, bc = facet_condition(m, (1,), m.strip.facet_tags.find(self.tag))
+        self.bcs = [bc]
         V0, _ = m.W.sub(0).collapse()
         self.rigid_displacement = dolfinx.fem.Function(V0)
         mismatch = ufl.grad(m.u - self.rigid_displacement)[:, 1]

@@ -15,7 +15,6 @@ from pathlib import Path
 
 import dolfinx
 import numpy as np
-import ufl
 
 from . import compat
 from .shell import NaghdiShell
@@ -37,11 +36,10 @@ class ShellWriter:
         V3 = dolfinx.fem.functionspace(mesh, basix.ufl.element("Lagrange", cell, model.degree, shape=(3,)))
         V1 = dolfinx.fem.functionspace(mesh, basix.ufl.element("Lagrange", cell, model.degree))
         points = compat.interpolation_points(V3)
-        flat = ufl.as_vector([model.xi[0], model.xi[1], 0.0])
         kx, ky = model.curvatures()
         self.fields = []
         for name, space, expr in (
-            ("offset", V3, model.phi - flat),
+            ("offset", V3, model.display_offset),
             ("u", V3, model.u),
             ("d", V3, model.d),
             ("kappa_long", V1, kx),

@@ -30,15 +30,13 @@ def shell_grid(model: NaghdiShell, scalar=None, name: str = "field"):
     import dolfinx
     import dolfinx.plot
     import pyvista
-    import ufl
 
     mesh = model.mesh
     cell = mesh.basix_cell()
     V3 = dolfinx.fem.functionspace(mesh, basix.ufl.element("Lagrange", cell, model.degree, shape=(3,)))
     points = compat.interpolation_points(V3)
     position = dolfinx.fem.Function(V3)
-    flat = ufl.as_vector([model.xi[0], model.xi[1], 0.0])
-    position.interpolate(dolfinx.fem.Expression(model.phi - flat, points))
+    position.interpolate(dolfinx.fem.Expression(model.display_offset, points))
     topology, cell_types, geometry = dolfinx.plot.vtk_mesh(V3)
     grid = pyvista.UnstructuredGrid(topology, cell_types, geometry + position.x.array.reshape(-1, 3))
     if scalar is not None:

@@ -224,6 +224,11 @@ class NaghdiShell:
         frame, ref = self.director_frame_numpy(xi)
         return angles_from_director(d, frame, theta1_near=ref[1] + rotation_near) - ref
 
+    @property
+    def display_offset(self):
+        """phi0 + u - (xi_1, xi_2, 0): warps the flat parameter mesh onto the deformed 3D shell."""
+        return self.phi - ufl.as_vector([self.xi[0], self.xi[1], 0.0])
+
     def curvatures(self):
         """Curvatures (longitudinal, transverse) of the deformed mid-surface along xi_1 and xi_2.
 

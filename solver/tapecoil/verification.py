@@ -18,7 +18,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import theory
-from .boundary import EdgeMotion, clamp
+from .boundary import EdgeMotion, clamp, facet_condition
 from .config import Config
 from .geometry import FREE_END, ROOT, MeshResolution, StripGeometry, create_strip_mesh
 from .shell import NaghdiShell, ShellMaterial
@@ -60,18 +60,20 @@ class CaseResult:
         return all(c.passed for c in self.checks)
 
 
+def _global_scalar(model: NaghdiShell, form) -> float:
+    """A scalar form (UFL or compiled) assembled and summed over all ranks (collective)."""
+    compiled = form if isinstance(form, dolfinx.fem.Form) else dolfinx.fem.form(form)
+    return model.mesh.comm.allreduce(dolfinx.fem.assemble_scalar(compiled), op=MPI.SUM)
+
+
 def _edge_integral(model: NaghdiShell, integrand, tag: int) -> float:
-    local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(integrand * model.ds(tag)))
-    return model.mesh.comm.allreduce(local, op=MPI.SUM)
+    return _global_scalar(model, integrand * model.ds(tag))
 
 
 def energies(model: NaghdiShell) -> dict[str, float]:
     """Membrane, bending and shear energies [J] at the current state (the solve's quadrature)."""
-    comm = model.mesh.comm
-    out = {}
-    for name in ("membrane", "bending", "shear"):
-        local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(getattr(model, f"energy_{name}")))
-        out[name] = comm.allreduce(local, op=MPI.SUM)
+    names = ("membrane", "bending", "shear")
+    out = {name: _global_scalar(model, getattr(model, f"energy_{name}")) for name in names}
     out["total"] = out["membrane"] + out["bending"] + out["shear"]
     return out
 
@@ -84,15 +86,12 @@ def quadratic_energies(model: NaghdiShell) -> dict[str, float]:
     """
     direction = model.q.copy()
     model.q.x.array[:] = 0.0
-    comm = model.mesh.comm
     out = {}
     try:
         for name in ("membrane", "bending", "shear"):
             form = getattr(model, f"energy_{name}")
             second = ufl.derivative(ufl.derivative(form, model.q, direction), model.q, direction)
-            out[name] = 0.5 * comm.allreduce(
-                dolfinx.fem.assemble_scalar(dolfinx.fem.form(second)), op=MPI.SUM
-            )
+            out[name] = 0.5 * _global_scalar(model, second)
     finally:
         model.q.x.array[:] = direction.x.array
     out["total"] = out["membrane"] + out["bending"] + out["shear"]
@@ -150,7 +149,7 @@ def tape_linear(
         {
             "technology": technology,
             "mesh": f"{resolution.along} x {resolution.across}",
-            "dofs": model.W.dofmap.index_map.size_global * model.W.dofmap.index_map_bs,
+            "dofs": _dofs(model),
             "linear_solve": result.reason_name,
             "converged": result.converged,
             "end_rotation": phi,
@@ -230,7 +229,7 @@ def rollup(
         checks,
         {
             "mesh": f"{res.along} x {res.across}",
-            "dofs": model.W.dofmap.index_map.size_global * model.W.dofmap.index_map_bs,
+            "dofs": _dofs(model),
             "steps": len(run),
             "newton_iterations": [s.iterations for s in run],
             "tip": [[theta, *tip.tolist()] for theta, tip, _ in tips],
@@ -251,9 +250,15 @@ def stress_free(config: Config, resolution: MeshResolution, comm=MPI.COMM_WORLD)
     model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
     energy = energies(model)["total"]
     F0 = dolfinx.fem.form(model.residual())
-    b = dolfinx.fem.petsc.assemble_vector(F0)
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    r0 = b.norm()
+
+    def residual_norm() -> float:
+        b = dolfinx.fem.petsc.assemble_vector(F0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        norm = b.norm()
+        b.destroy()
+        return norm
+
+    r0 = residual_norm()
     # scale: the residual of the reference state with the free end turned by 1 rad rigidly
     end = EdgeMotion(model, FREE_END, axis=np.array([0.0, 1.0, 0.0]), axis_point=np.array([tp.L, 0.0, 0.0]))
     end.set(1.0)
@@ -261,11 +266,7 @@ def stress_free(config: Config, resolution: MeshResolution, comm=MPI.COMM_WORLD)
     for bc in end.bcs:
         bc.set(model.q.x.array)
     model.q.x.scatter_forward()
-    b1 = dolfinx.fem.petsc.assemble_vector(F0)
-    b1.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    scale = b1.norm()
-    b.destroy()
-    b1.destroy()
+    scale = residual_norm()
     return CaseResult(
         "stress-free",
         [
@@ -339,13 +340,9 @@ def semicylinder(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, 
     strip = create_strip_mesh(comm, StripGeometry(R, math.pi * R, L), res)
     model = NaghdiShell(strip, ShellMaterial(E, nu, h))
     bcs = list(clamp(model, ROOT).bcs)
-    fdim = strip.mesh.topology.dim - 1
     sides = np.concatenate([strip.facet_tags.find(SIDE_NEG), strip.facet_tags.find(SIDE_POS)])
-    for sub in ((0, 2), (1, 0)):  # u_z (normal to the plane of the edges), theta_0 (about the axis)
-        space = model.W.sub(sub[0]).sub(sub[1])
-        collapsed, _ = space.collapse()
-        dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), fdim, sides)
-        bcs.append(dolfinx.fem.dirichletbc(dolfinx.fem.Function(collapsed), dofs, space))
+    # u_z (normal to the plane of the edges) and theta_0 (the rotation about the axis) vanish
+    bcs += [facet_condition(model, sub, sides)[1] for sub in ((0, 2), (1, 0))]
     load = dolfinx.fem.Constant(strip.mesh, 0.0)
     crown = (L, 0.0)
     force = PointForce(owned_node_dofs(model.W, (0, 2), crown), load)
@@ -447,15 +444,8 @@ def _region_energy_density(model: NaghdiShell, V0, mask: np.ndarray) -> float:
     chi = dolfinx.fem.Function(V0)
     chi.x.array[: len(mask)] = mask.astype(float)
     chi.x.scatter_forward()
-    comm = model.mesh.comm
-    energy = sum(
-        comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(f)), op=MPI.SUM)
-        for f in model.energy_forms(chi)
-    )
-    area = comm.allreduce(
-        dolfinx.fem.assemble_scalar(dolfinx.fem.form(chi * model.jacobian * model.dx)), op=MPI.SUM
-    )
-    return energy / area
+    energy = sum(_global_scalar(model, f) for f in model.energy_forms(chi))
+    return energy / _global_scalar(model, chi * model.jacobian * model.dx)
 
 
 def tape_fold(
@@ -510,7 +500,7 @@ def tape_fold(
         writer.write(0.0)
 
     def record(step):
-        energy = comm.allreduce(dolfinx.fem.assemble_scalar(energy_form), op=MPI.SUM)
+        energy = _global_scalar(model, energy_form)
         path.append((end.angle, energy, step.iterations, step.relaxed))
         if writer is not None:
             writer.write(end.angle)
