@@ -117,6 +117,42 @@ def cmd_verify(args: argparse.Namespace) -> int:
     return 0 if all(r.passed for r in results) else 1
 
 
+def _with_mesh(config, preset: str | None):
+    import dataclasses
+
+    if preset is None:
+        return config
+    return dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset=preset))
+
+
+def _entries(measures: dict):
+    """(name, computed, reference, error) of the measures that have a reference."""
+    for name, value in measures.items():
+        if isinstance(value, dict) and "computed" in value and "error" in value:
+            yield name, value["computed"], value["reference"], value["error"]
+
+
+def cmd_coil(args: argparse.Namespace) -> int:
+    config = _with_mesh(load_config(args.config), args.mesh)
+    from .coiling import run_coiling
+
+    directory = args.out or f"{config.output.directory}/coil"
+    summary, _ = run_coiling(config, directory, resume=args.resume, progress=not args.json)
+    if args.json:
+        _echo(json.dumps(summary, indent=2))
+    else:
+        run = summary["run"]
+        state = "stowed" if summary["completed"] else f"STOPPED: {summary['message']}"
+        _echo(
+            f"coiling to {summary['hub_angle']:.4g} of {summary['target_hub_angle']:g} rad: {state}\n"
+            f"  mesh {run['mesh']} ({run['dofs']} dofs) on {run['ranks']} rank(s): {run['steps']} steps, "
+            f"{run['newton_iterations']} Newton iterations, {run['wall_time']:.1f} s; results in {directory}"
+        )
+        for name, computed, reference, error in _entries(summary["measures"]):
+            _echo(f"  {name:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}")
+    return 0 if summary["completed"] else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tapecoil", description="Coiling and deployment of tape springs (FEniCSx)."
@@ -137,6 +173,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=cmd_verify)
+
+    p = sub.add_parser("coil", help="coil the tape onto the hub to the stowed state (quasi-static)")
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
+    p.add_argument("--mesh", choices=("coarse", "default", "fine"), help="mesh preset (overrides the file)")
+    p.add_argument("--out", help="results directory (default: <output.directory>/coil)")
+    p.add_argument("--resume", help="checkpoint directory (a previous run's stowed/) to continue from")
+    p.add_argument("--json", action="store_true", help="print the JSON summary")
+    p.set_defaults(func=cmd_coil)
 
     p = sub.add_parser("config", help="print a configuration as TOML (the defaults if none is given)")
     p.add_argument("config", nargs="?", help="TOML configuration to check and print")

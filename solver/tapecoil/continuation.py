@@ -68,6 +68,8 @@ class Continuation:
     control: SolverConfig
     relaxation: Relaxation | None = None
     on_step: Callable[[StepRecord], None] | None = None
+    # predict(t_from, t_to): an initial guess for the solve at t_to from the converged state at t_from
+    predict: Callable[[float, float], None] | None = None
     easy_iterations: int = 5
     history: list[StepRecord] = field(default_factory=list)
 
@@ -126,6 +128,8 @@ class Continuation:
                 target = marks[0]
             t0 = time.perf_counter()
             self.set_load(target)
+            if self.predict is not None:
+                self.predict(t, target)
             result = self.solve()
             iterations, relaxed = result.iterations, False
             if not result.converged:

@@ -270,3 +270,38 @@ class NaghdiShell:
 
     def jacobian_form(self, residual):
         return ufl.derivative(residual, self.q, ufl.TrialFunction(self.W))
+
+
+class Nodes:
+    """Node-wise numpy views of a shell state: positions, directors and the W-dofs behind them.
+
+    All components of u and theta live on the same Q2 nodes; ``space`` is the scalar Q2 space on
+    those nodes (local and ghost, in its own order) and ``u_dofs`` (n, 3), ``theta_dofs`` (n, 2)
+    give the W-dof of each component at each node. Computations on these arrays are rank-local and,
+    done on ghosts as on owners from the same values, give every rank the same values.
+    """
+
+    def __init__(self, model: NaghdiShell):
+        W = model.W
+        spaces_maps = [W.sub(0).sub(i).collapse() for i in range(3)]
+        spaces_maps += [W.sub(1).sub(i).collapse() for i in range(2)]
+        self.space = spaces_maps[0][0]
+        xi = self.space.tabulate_dof_coordinates()
+        for space, _ in spaces_maps[1:]:  # the same node order in every collapsed component
+            if not np.array_equal(space.tabulate_dof_coordinates(), xi):
+                raise RuntimeError("collapsed shell components do not share their node order")
+        self.u_dofs = np.column_stack([np.asarray(m) for _, m in spaces_maps[:3]])
+        self.theta_dofs = np.column_stack([np.asarray(m) for _, m in spaces_maps[3:]])
+        self.xi = xi[:, :2].T.copy()
+        self.reference = model.strip.geometry.phi0(self.xi)
+        self.frame, self.theta_ref = model.director_frame_numpy(self.xi)
+
+    def positions(self, q: np.ndarray) -> np.ndarray:
+        """Mid-surface positions (3, n) for the W-dof array ``q``."""
+        return self.reference + q[self.u_dofs].T
+
+    def directors(self, q: np.ndarray) -> np.ndarray:
+        """Unit directors (3, n) for the W-dof array ``q``."""
+        t0, t1 = self.theta_ref + q[self.theta_dofs].T
+        e1, e2, e3 = self.frame
+        return np.cos(t0) * np.sin(t1) * e1 - np.sin(t0) * e2 + np.cos(t0) * np.cos(t1) * e3

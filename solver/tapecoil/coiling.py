@@ -1,0 +1,680 @@
+"""Quasi-static coiling of a tape spring onto a rotating hub, as in the thesis's benchmark run.
+
+The procedure mirrors the physical one (issue 4):
+
+1. Flattening: the root edge, attached to the hub, is driven from the tape's curved section to
+   the flat section on the hub's top generator (curvature (1 - f)/R, f from 0 to 1) while the
+   pull at the free end rises to T. The section near the root flattens onto the hub instead of
+   snapping at the first rotation.
+2. Coiling: the hub turns (load-stepped hub angle, adaptive steps with cut-back); the root
+   turns with it (displacement and director), the tape wraps onto the hub and then onto its own
+   turns (penalty contact, :mod:`tapecoil.contact`), and the free end slides along the guide
+   line tangent to the hub's top (z = 0: displacement across and normal to the line and the end's
+   rotations held), pulled by T along +x.
+
+Each step starts from a predictor: material already on the coil turns rigidly with the hub, the
+free part slides along the guide line by the length wound on, and material in between is
+blended. Newton then only corrects the ploy region.
+
+All quantities are SI. Sign conventions: the hub angle is positive in the coiling sense (the root
+moves from the top of the hub towards -x, i.e. a rotation about -y); the longitudinal curvature
+of the coil is negative in the shell's convention (opposite to the section's +1/R) and is reported
+as a magnitude.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from . import theory
+from .boundary import HubRoot, facet_condition, rotation_matrix
+from .config import Config
+from .contact import CoilContact, default_penalty
+from .continuation import Continuation, ContinuationError, Relaxation, StepRecord
+from .geometry import (
+    FREE_END,
+    ROOT,
+    MeshResolution,
+    StripGeometry,
+    StripMesh,
+    create_strip_mesh,
+    hub_axis_point,
+)
+from .shell import NaghdiShell, ShellMaterial
+from .solvers import SNESSolver
+
+# the pull at the free end rises with the flattening; the guide line is the hub's top tangent
+_GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
+
+
+def _smoothstep(x: np.ndarray) -> np.ndarray:
+    s = np.clip(x, 0.0, 1.0)
+    return s * s * (3.0 - 2.0 * s)
+
+
+def _scalar(comm, form) -> float:
+    return comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
+
+
+class CoilingModel:
+    """The tape, hub, attachment, guide, contact and solver of a coiling run.
+
+    ``strip``: an existing strip mesh (a restart); otherwise one is built from ``config`` (or
+    ``resolution``). ``tension_control``: "force" pulls the free end with T; "displacement"
+    prescribes the free end's slide along the guide (``set_slide``) and the tension is the
+    reaction there.
+    """
+
+    def __init__(
+        self,
+        config: Config,
+        comm=MPI.COMM_WORLD,
+        resolution: MeshResolution | None = None,
+        strip: StripMesh | None = None,
+        tension_control: str = "force",
+    ):
+        if tension_control not in ("force", "displacement"):
+            raise ValueError(f"tension_control must be 'force' or 'displacement', got {tension_control!r}")
+        self.config = config
+        self.comm = comm
+        tp, r_hub = config.tape, config.hub.radius
+        self.r_hub = r_hub
+        if strip is None:
+            geom = StripGeometry(tp.R, tp.b, tp.L)
+            strip = create_strip_mesh(comm, geom, resolution or MeshResolution.from_config(config.mesh, tp.L))
+        self.strip = strip
+        res = strip.resolution
+        self.element_length = tp.L / res.along
+        self.model = model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
+        self.axis_point = hub_axis_point(r_hub, tp.h)
+        self.root = HubRoot(model, ROOT, self.axis_point, tp.R)
+
+        cc = config.contact
+        self.penalty = cc.penalty or cc.penalty_scale * default_penalty(tp.E, tp.h, self.element_length)
+        max_turns = math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1
+        # the climb over the root end spread over about two elements (at least 0.3 rad)
+        ramp = max(2 * self.element_length / r_hub, 0.3)
+        self.contact = CoilContact(model, self.axis_point, r_hub, self.penalty, max_turns, ramp)
+        self.contact.reset()
+
+        free_end = strip.facet_tags.find(FREE_END)
+        self.guide = [facet_condition(model, sub, free_end) for sub in _GUIDE_COMPONENTS]
+        bcs = self.root.bcs + [bc for _, bc in self.guide]
+        self.tension_control = tension_control
+        self.tension = dolfinx.fem.Constant(strip.mesh, 0.0)
+        self.slide = None
+        if tension_control == "displacement":
+            self.slide, slide_bc = facet_condition(model, (0, 0), free_end)
+            bcs.append(slide_bc)
+        self.bcs = bcs
+
+        # the pull: T spread evenly over the free end's arc; its work is T times the end's mean u_x
+        self.end_slide_form = dolfinx.fem.form(model.u[0] / tp.b * model.ds(FREE_END))
+        pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
+        self.energy = model.strain_energy + self.contact.energy
+        self.viscosity, self.previous, viscous = model.relaxation(length_scale=self.element_length)
+        potential = self.energy - (pull_work if tension_control == "force" else 0)
+        self.residual_form = ufl.derivative(potential, model.q, model.dq)
+        F = self.residual_form + viscous
+        self.solver = SNESSolver.from_config(F, model.jacobian_form(F), model.q, bcs, config.solver)
+        self.forms = {
+            name: dolfinx.fem.form(form)
+            for name, form in (
+                ("membrane", model.energy_membrane),
+                ("bending", model.energy_bending),
+                ("shear", model.energy_shear),
+                ("contact_hub", self.contact.energy_hub),
+                ("contact_coil", self.contact.energy_coil),
+            )
+        }
+        self._reaction_form = None
+        self._converged: list[tuple[float, np.ndarray]] = []
+
+    # -- loading --------------------------------------------------------------------------
+    def set_flattening(self, f: float) -> None:
+        self.root.set(f, 0.0)
+        if self.tension_control == "force":
+            self.tension.value = f * self.config.coiling.tension
+
+    def set_hub_angle(self, angle: float) -> None:
+        self.root.set(1.0, angle)
+
+    def set_slide(self, distance: float) -> None:
+        """Displacement control: the free end's slide along the guide, towards the hub [m]."""
+        self.slide.x.array[:] = -distance
+
+    def predict(self, angle_from: float, angle_to: float) -> None:
+        """Initial guess at ``angle_to`` from the converged states at ``angle_from`` and before.
+
+        The secant extrapolation of the last two converged states carries the steady motion of
+        the free part and the ploy region; material already on the coil (winding angle more than
+        a radian behind the tangent point) instead turns rigidly with the hub, which the secant
+        would get wrong by r dtheta^2 / 2, a few thicknesses at 0.1 rad. The two are blended
+        over the last radian before the tangent point.
+        """
+        q = self.model.q.x.array
+        current = q.copy()
+        dtheta = angle_to - angle_from
+        last = self._converged[-2] if len(self._converged) == 2 else None
+        if last is not None and angle_from - last[0] > 0:
+            q += (current - last[1]) * (dtheta / (angle_from - last[0]))
+        c = self.contact
+        nodes = c.nodes
+        w = _smoothstep(angle_from - c.psi.x.array)[:, None]
+        a = self.axis_point[:, None]
+        x = nodes.positions(current)
+        turned = rotation_matrix(np.array([0.0, -1.0, 0.0]), dtheta) @ (x - a) + a - nodes.reference
+        q[nodes.u_dofs] = w * turned.T + (1 - w) * q[nodes.u_dofs]
+        rotated = current[nodes.theta_dofs[:, 1]] - dtheta
+        q[nodes.theta_dofs[:, 1]] = w[:, 0] * rotated + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 1]]
+
+    def update(self, angle: float) -> None:
+        """After a converged step: winding angles from the new state; keep it for the secant."""
+        self.contact.update(angle)
+        self._converged = [*self._converged[-1:], (angle, self.model.q.x.array.copy())]
+
+    # -- measures -------------------------------------------------------------------------
+    def energies(self) -> dict[str, float]:
+        out = {name: _scalar(self.comm, form) for name, form in self.forms.items()}
+        out["strain"] = out["membrane"] + out["bending"] + out["shear"]
+        out["contact"] = out["contact_hub"] + out["contact_coil"]
+        return out
+
+    def end_slide(self) -> float:
+        """Mean displacement of the free end along the guide (+x) [m]."""
+        return _scalar(self.comm, self.end_slide_form)
+
+    def end_reaction(self) -> float:
+        """Tension carried by the tape at the free end [N]: the internal force along +x there.
+
+        The derivative of the stored energy (strain + contact) with respect to the end's u_x
+        dofs, summed: what the pull (force control) or the guide (displacement control) holds.
+        """
+        if self._reaction_form is None:
+            self._reaction_form = dolfinx.fem.form(ufl.derivative(self.energy, self.model.q, self.model.dq))
+            self._reaction_vector = dolfinx.fem.Function(self.model.W)
+            facets = self.strip.facet_tags.find(FREE_END)
+            V, _ = self.model.W.sub(0).sub(0).collapse()
+            dofs = dolfinx.fem.locate_dofs_topological(
+                (self.model.W.sub(0).sub(0), V), self.model.mesh.topology.dim - 1, facets
+            )[0]
+            owned = self.model.W.dofmap.index_map.size_local * self.model.W.dofmap.index_map_bs
+            self._end_dofs = dofs[dofs < owned]
+        b = self._reaction_vector.x
+        b.array[:] = 0.0
+        dolfinx.fem.assemble_vector(b.array, self._reaction_form)
+        b.scatter_reverse(dolfinx.la.InsertMode.add)
+        return self.comm.allreduce(float(b.array[self._end_dofs].sum()), op=MPI.SUM)
+
+    def centre_line(self) -> dict[str, np.ndarray]:
+        """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
+
+        Columns: xi_1, winding angle psi, mid-surface distance from the hub axis.
+        """
+        nodes = self.contact.nodes
+        n_owned = nodes.space.dofmap.index_map.size_local
+        xi = nodes.xi[:, :n_owned]
+        distance = np.abs(xi[1])
+        local_min = distance.min() if distance.size else np.inf
+        centre = self.comm.allreduce(local_min, op=MPI.MIN)
+        mask = distance <= centre + 1e-9 * self.config.tape.b
+        radius, _ = self.contact.polar(nodes.positions(self.model.q.x.array)[:, :n_owned])
+        local = np.column_stack([xi[0][mask], self.contact.psi.x.array[:n_owned][mask], radius[mask]])
+        rows = np.vstack(self.comm.allgather(local))
+        rows = rows[np.argsort(rows[:, 0])]
+        return {"xi1": rows[:, 0], "psi": rows[:, 1], "radius": rows[:, 2]}
+
+    def coil_geometry(self, angle: float) -> dict[str, float]:
+        """Coiled length and outer coil radius [m] (collective).
+
+        The coiled length is the material length behind the tangent point, where the centre
+        line's winding angle equals the hub angle. The outer radius is that of the outer face of
+        the last turn half a turn behind the tangent point (mid-surface distance + h/2): at the
+        tangent point itself the tape is already lifting off into the ploy region.
+        """
+        line = self.centre_line()
+        psi, xi1, radius = line["psi"], line["xi1"], line["radius"]
+        h = self.config.tape.h
+        if angle <= psi[0]:
+            return {"coiled_length": 0.0, "outer_radius": float(radius[0] + h / 2)}
+        s = float(np.interp(angle, psi, xi1))
+        probe = angle - math.pi if angle > math.pi else angle
+        r = float(np.interp(probe, psi, radius))
+        return {"coiled_length": s, "outer_radius": r + 0.5 * h}
+
+    def max_penetration(self) -> float:
+        """Largest penetration of the inner face into the hub or the turn beneath [m] (>= 0)."""
+        local = self.contact.nodal_penetration()
+        return max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
+
+
+@dataclass
+class CoilingResult:
+    """The outcome of a coiling run: per-step history, final measures and run information."""
+
+    history: list[dict] = field(default_factory=list)
+    info: dict = field(default_factory=dict)
+    completed: bool = False
+    message: str = ""
+
+
+class CoilingRun:
+    """Flatten then coil to the target hub angle, recording a history row per converged step.
+
+    ``on_step(row)`` is called (on every rank) after each converged step, e.g. for output.
+    """
+
+    def __init__(self, model: CoilingModel, on_step=None):
+        self.m = model
+        self.on_step = on_step
+        self.result = CoilingResult()
+        self._last_potential = None
+        self._t0 = time.perf_counter()
+
+    def _row(self, phase: str, load: float, step: StepRecord) -> dict:
+        m = self.m
+        angle = m.root.angle
+        e = m.energies()
+        slide = m.end_slide()
+        geometry = m.coil_geometry(angle)
+        tension = m.end_reaction()
+        # hub torque from the energy balance of the step: work of the hub = change of stored
+        # energy + work against the pull (secant over the step)
+        potential = e["strain"] + e["contact"] - tension * slide
+        torque = float("nan")
+        if phase == "coil" and self._last_potential is not None and step.step > 0:
+            torque = (potential - self._last_potential) / step.step
+        self._last_potential = potential
+        row = {
+            "phase": phase,
+            "load": load,
+            "hub_angle": angle,
+            "step": step.step,
+            "newton_iterations": step.iterations,
+            "cutbacks": step.cutbacks,
+            "relaxed": int(step.relaxed),
+            "hub_torque": torque,
+            "tension": tension,
+            "end_slide": slide,
+            "membrane_energy": e["membrane"],
+            "bending_energy": e["bending"],
+            "shear_energy": e["shear"],
+            "strain_energy": e["strain"],
+            "contact_energy_hub": e["contact_hub"],
+            "contact_energy_coil": e["contact_coil"],
+            "max_penetration": m.max_penetration(),
+            "coiled_length": geometry["coiled_length"],
+            "outer_radius": geometry["outer_radius"],
+            "wall_time": time.perf_counter() - self._t0,
+        }
+        # the first coiling row has no torque yet: 0 rather than NaN in the files
+        if not math.isfinite(row["hub_torque"]):
+            row["hub_torque"] = 0.0
+        self.result.history.append(row)
+        if self.on_step is not None:
+            self.on_step(row)
+        return row
+
+    def _continuation(self, set_load, control, predict=None, on_converged=None):
+        m = self.m
+        relax = Relaxation(
+            m.viscosity, m.previous, scale=10 * m.config.tape.D / m.element_length**4, max_iterations=100
+        )
+        return Continuation(m.solver.solve, set_load, m.model.q, control, relaxation=relax, predict=predict)
+
+    def flatten(self) -> None:
+        m = self.m
+        steps = m.config.coiling.flatten_steps
+        control = dataclasses.replace(m.config.solver, initial_step=1.0 / steps, max_step=1.0 / steps)
+        cont = self._continuation(m.set_flattening, control)
+        cont.on_step = lambda step: self._row("flatten", step.load, step)
+        cont.run(0.0, 1.0)
+
+    def coil(self, final_angle: float, start_angle: float = 0.0, stops: tuple[float, ...] = ()) -> None:
+        m = self.m
+        span = final_angle - start_angle
+        # steps of 0.05 to 0.15 rad (as fractions of the span the continuation works on): beyond
+        # about 0.2 rad Newton from the predictor diverges on the benchmark tape
+        base = m.config.solver
+        control = dataclasses.replace(
+            base,
+            initial_step=min(0.05 / span, 1.0),
+            max_step=min(0.15 / span, 1.0),
+            min_step=min(base.min_step, 1e-4 / span),
+        )
+
+        def converged(step):
+            m.update(step.load)
+            self._row("coil", step.load, step)
+
+        m.update(start_angle)
+        cont = self._continuation(m.set_hub_angle, control, predict=m.predict)
+        cont.on_step = converged
+        cont.run(start_angle, final_angle, stops)
+
+    def run(self) -> CoilingResult:
+        """Flatten and coil to ``config.coiling.hub_angle``; a failure keeps the last converged state."""
+        try:
+            self.flatten()
+            self.coil(self.m.config.coiling.hub_angle)
+            self.result.completed = True
+        except ContinuationError as err:
+            self.result.message = str(err)
+        return self.result
+
+
+# -- checkpoint -------------------------------------------------------------------------------
+def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict) -> None:
+    """The state a restart or the deployment needs: mesh and tags, u, theta, winding angle, meta.
+
+    adios4dolfinx (ADIOS2 BP) for the mesh and the functions; ``meta`` (hub angle, tension,
+    configuration) as JSON beside it.
+    """
+    import adios4dolfinx
+
+    path = Path(path)
+    if model.comm.rank == 0:
+        path.mkdir(parents=True, exist_ok=True)
+    model.comm.barrier()
+    bp = path / "state.bp"
+    mesh = model.strip.mesh
+    adios4dolfinx.write_mesh(bp, mesh)
+    adios4dolfinx.write_meshtags(bp, mesh, model.strip.facet_tags, meshtag_name="facets")
+    adios4dolfinx.write_meshtags(bp, mesh, model.strip.cell_tags, meshtag_name="cells")
+    for name, function in _checkpoint_functions(model).items():
+        adios4dolfinx.write_function(bp, function, name=name)
+    if model.comm.rank == 0:
+        (path / "meta.json").write_text(json.dumps(meta, indent=2))
+    model.comm.barrier()
+
+
+def _checkpoint_functions(model: CoilingModel) -> dict:
+    out = {}
+    for name, i in (("displacement", 0), ("rotation", 1)):
+        V, dofs = model.model.W.sub(i).collapse()
+        f = dolfinx.fem.Function(V, name=name)
+        f.x.array[:] = model.model.q.x.array[dofs]
+        out[name] = (f, dofs)
+    out = {name: f for name, (f, _) in out.items()}
+    out["winding_angle"] = model.contact.psi
+    return out
+
+
+def read_checkpoint(
+    path: str | Path, config: Config, comm=MPI.COMM_WORLD, **kwargs
+) -> tuple[CoilingModel, dict]:
+    """A :class:`CoilingModel` in the state written by :func:`write_checkpoint` (any rank count)."""
+    import adios4dolfinx
+
+    path = Path(path)
+    meta = json.loads((path / "meta.json").read_text())
+    bp = path / "state.bp"
+    mesh = adios4dolfinx.read_mesh(bp, comm)
+    facets = adios4dolfinx.read_meshtags(bp, mesh, meshtag_name="facets")
+    cells = adios4dolfinx.read_meshtags(bp, mesh, meshtag_name="cells")
+    tp = config.tape
+    res = MeshResolution(**meta["resolution"])
+    strip = StripMesh(mesh, cells, facets, StripGeometry(tp.R, tp.b, tp.L), res)
+    model = CoilingModel(config, comm, strip=strip, **kwargs)
+    for name, i in (("displacement", 0), ("rotation", 1)):
+        V, dofs = model.model.W.sub(i).collapse()
+        f = dolfinx.fem.Function(V)
+        adios4dolfinx.read_function(bp, f, name=name)
+        model.model.q.x.array[dofs] = f.x.array
+    adios4dolfinx.read_function(bp, model.contact.psi, name="winding_angle")
+    model.model.q.x.scatter_forward()
+    model.contact.hub_angle = meta["hub_angle"]
+    model.root.set(1.0, meta["hub_angle"])
+    model.set_flattening  # noqa: B018 (the tension is restored below)
+    if model.tension_control == "force":
+        model.tension.value = meta["tension"]
+    return model, meta
+
+
+def _ramps(psi: np.ndarray, ramp_width: float, margin: float) -> np.ndarray:
+    """True where psi lies in (or within ``margin`` of) a climb over the root step."""
+    phase = np.mod(psi, 2 * math.pi)
+    return (phase >= 2 * math.pi - ramp_width - margin) | (phase <= margin)
+
+
+def coil_measures(model: CoilingModel) -> dict:
+    """Measured quantities of the coil at the current state against physics.md (collective).
+
+    Returns a dict of named entries {computed, reference, error, ...}, plus profiles along the
+    centre line. The "coiled interior" is the wound material more than one radian from the root
+    and from the tangent point, away from the climbs over the root step, over the inner 60 % of
+    the width (the thesis's comparison region; the free edges carry a boundary layer).
+    """
+    from .verification import _cell_midpoint_values
+
+    cfg = model.config
+    tp, r_hub, h = cfg.tape, model.r_hub, cfg.tape.h
+    comm = model.comm
+    m, contact = model.model, model.contact
+    angle = model.root.angle
+    geometry = model.coil_geometry(angle)
+    coiled = geometry["coiled_length"]
+    out: dict = {"hub_angle": angle, "coiled_length": coiled}
+
+    def entry(computed, reference, **extra):
+        error = abs(computed - reference) / abs(reference) if reference else float("nan")
+        return {"computed": float(computed), "reference": float(reference), "error": float(error), **extra}
+
+    # energy: the coiled part (psi behind the tangent point) against the plate estimate for the
+    # spiral of that length; the whole tape's strain energy includes the ploy region
+    wound = ufl.conditional(ufl.lt(contact.psi, angle), 1.0, 0.0)
+    coiled_energy = sum(_scalar(comm, dolfinx.fem.form(f)) for f in m.energy_forms(wound))
+    wound_angle = theory.rotation_for_coiled_length(coiled, r_hub, h)
+    reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu)
+    total = model.energies()
+    out["stored_energy_coiled"] = entry(coiled_energy, reference_energy)
+    out["strain_energy_total"] = entry(total["strain"], reference_energy, note="includes the ploy region")
+
+    # curvatures and stresses at cell midpoints
+    kx, ky = m.curvatures()
+    E, nu = tp.E, tp.nu
+    e, k = m.membrane_strain, m.bending_strain
+    c = E / (1 - nu**2)
+    stresses = []
+    for z in (0.5 * h, -0.5 * h):
+        ex, ey = e[0, 0] + z * k[0, 0], e[1, 1] + z * k[1, 1]
+        stresses += [c * (ex + nu * ey), c * (ey + nu * ex)]
+    _, cells = _cell_midpoint_values(m, [contact.psi, kx, ky, *stresses])
+    cells = np.vstack(comm.allgather(cells))
+    xi1, xi2, psi, k_long, k_trans = (cells[:, i] for i in range(5))
+    sx = np.max(np.abs(cells[:, [5, 7]]), axis=1)
+    sy = np.max(np.abs(cells[:, [6, 8]]), axis=1)
+    turn = np.floor(psi / (2 * math.pi))
+    rho = r_hub + h / 2 + h * turn
+    interior = (
+        (psi > 1.0)
+        & (psi < angle - 1.0)
+        & ~_ramps(psi, contact.ramp_width, 0.3)
+        & (np.abs(xi2) <= 0.3 * tp.b)
+    )
+    if interior.any():
+        curvature_ratio = np.abs(k_long[interior]) * rho[interior]
+        sx_ref, sy_ref = theory.coil_stresses(rho[interior], tp.R, E, nu, h / 2)
+        sx_ratio, sy_ratio = sx[interior] / sx_ref, sy[interior] / sy_ref
+        out["cells_interior"] = int(interior.sum())
+        out["curvature_longitudinal"] = entry(
+            np.mean(curvature_ratio),
+            1.0,
+            worst=float(curvature_ratio[np.argmax(np.abs(curvature_ratio - 1))]),
+            quantity="|kappa_long| rho (mean over the interior; worst cell)",
+        )
+        out["curvature_transverse"] = {
+            "computed": float(np.max(np.abs(k_trans[interior])) * tp.R),
+            "reference": 0.0,
+            "quantity": "max |kappa_trans| R over the interior (flattened: 0)",
+        }
+        out["stress_x"] = entry(
+            np.mean(sx_ratio),
+            1.0,
+            worst=float(sx_ratio[np.argmax(np.abs(sx_ratio - 1))]),
+            reference_first_turn_Pa=float(theory.coil_stresses(r_hub, tp.R, E, nu, h / 2)[0]),
+        )
+        out["stress_y"] = entry(
+            np.mean(sy_ratio),
+            1.0,
+            worst=float(sy_ratio[np.argmax(np.abs(sy_ratio - 1))]),
+            reference_first_turn_Pa=float(theory.coil_stresses(r_hub, tp.R, E, nu, h / 2)[1]),
+        )
+
+    # coil radius and the separation of successive turns (centre line, half a turn from the root)
+    out["outer_radius"] = entry(geometry["outer_radius"], theory.outer_radius_after_rotation(angle, r_hub, h))
+    line = model.centre_line()
+    probes = [math.pi + 2 * math.pi * n for n in range(int((angle - math.pi) // (2 * math.pi)) + 1)]
+    radii = np.interp(probes, line["psi"], line["radius"]) if probes else np.array([])
+    out["turn_radii"] = [float(r) for r in radii]
+    if len(radii) > 1:
+        gaps = np.diff(radii) / h
+        out["turn_separation"] = entry(
+            np.mean(gaps),
+            1.0,
+            worst=float(gaps[np.argmax(np.abs(gaps - 1))]),
+            quantity="radial step between turns / h",
+        )
+    out["first_turn_radius"] = entry(radii[0], r_hub + h / 2) if len(radii) else None
+
+    # ploy region: along the centre cells beyond the tangent point, where the transverse
+    # curvature rises from 10 % to 90 % of 1/R
+    centre = np.abs(xi2) <= np.min(np.abs(xi2)) + 1e-9
+    order = np.argsort(xi1[centre])
+    s_line, kt_line = xi1[centre][order], k_trans[centre][order] * tp.R
+    beyond = s_line > coiled
+    ploy = None
+    if beyond.any():
+        s_b, kt_b = s_line[beyond], kt_line[beyond]
+        high = np.nonzero(kt_b >= 0.9)[0]
+        if len(high):
+            low = np.nonzero(kt_b[: high[0] + 1] <= 0.1)[0]
+            start = s_b[low[-1]] if len(low) else coiled
+            ploy = float(s_b[high[0]] - start)
+    out["ploy_length"] = {
+        "computed": ploy,
+        "reference_arc_width": theory.ploy_length(tp.b, tp.R, h),
+        "reference_projected_width": theory.ploy_length(2 * tp.R * math.sin(tp.alpha / 2), tp.R, h),
+        "free_length": tp.L - coiled,
+        "quantity": "centre line, transverse curvature from 0.1/R to 0.9/R",
+    }
+    out["profile"] = {"xi1": s_line.tolist(), "kappa_trans_R": kt_line.tolist()}
+    return out
+
+
+def _progress(comm, total: float, label: str):
+    """A tqdm bar on rank 0 (None elsewhere, or when tqdm is missing)."""
+    if comm.rank != 0:
+        return None
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return None
+    return tqdm(
+        total=round(total, 3),
+        desc=label,
+        unit="rad",
+        bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} {unit} [{elapsed}<{remaining}] {postfix}",
+    )
+
+
+def run_coiling(
+    config: Config,
+    directory: str | Path,
+    comm=MPI.COMM_WORLD,
+    resume: str | Path | None = None,
+    progress: bool = True,
+) -> tuple[dict, CoilingModel]:
+    """Coil to the stowed state and write the results directory; returns the summary and model.
+
+    ``directory`` receives: config.toml (the configuration used), history.csv (a row per
+    converged step), coil.bp (VTX snapshots every ``output.vtx_every`` steps and the last state),
+    stowed/ (the checkpoint: the last converged state, completed or not) and summary.json.
+    ``resume``: a checkpoint directory to continue from (its hub angle onwards).
+    """
+    from .config import to_toml
+    from .output import ShellWriter, write_csv
+
+    directory = Path(directory)
+    if comm.rank == 0:
+        directory.mkdir(parents=True, exist_ok=True)
+        (directory / "config.toml").write_text(to_toml(config))
+    comm.barrier()
+    t_start = time.perf_counter()
+    if resume is not None:
+        model, meta = read_checkpoint(resume, config, comm)
+        start_angle = meta["hub_angle"]
+    else:
+        model, start_angle = CoilingModel(config, comm), 0.0
+    target = config.coiling.hub_angle
+    bar = _progress(comm, target, "coiling") if progress else None
+    writer = ShellWriter(model.model, directory / "coil.bp")
+    count = [0]
+
+    def on_step(row):
+        count[0] += 1
+        if count[0] % config.output.vtx_every == 0:
+            writer.write(row["hub_angle"])
+        if bar is not None:
+            bar.n = round(row["hub_angle"], 3)
+            bar.set_postfix_str(f"{row['phase']} step {row['step']:.3g} its {row['newton_iterations']}")
+
+    run = CoilingRun(model, on_step=on_step)
+    try:
+        if resume is None:
+            run.flatten()
+        run.coil(target, start_angle=start_angle)
+        run.result.completed = True
+    except ContinuationError as err:
+        run.result.message = str(err)
+    finally:
+        if bar is not None:
+            bar.close()
+    writer.write(model.root.angle)
+    writer.close()
+    wall = time.perf_counter() - t_start
+    history = run.result.history
+    write_csv(directory / "history.csv", history, comm)
+    res = model.strip.resolution
+    meta = {
+        "hub_angle": model.root.angle,
+        "tension": float(model.tension.value),
+        "completed": run.result.completed,
+        "resolution": {"across": res.across, "along": res.along, "grading": res.grading},
+    }
+    if config.output.checkpoint:
+        write_checkpoint(model, directory / "stowed", meta)
+    measures = coil_measures(model)
+    timing = model.solver.timing_per_iteration()
+    summary = {
+        "completed": run.result.completed,
+        "message": run.result.message,
+        "hub_angle": model.root.angle,
+        "target_hub_angle": target,
+        "measures": measures,
+        "run": {
+            "ranks": comm.size,
+            "dofs": model.model.W.dofmap.index_map.size_global * model.model.W.dofmap.index_map_bs,
+            "mesh": f"{res.along} x {res.across}",
+            "penalty": model.penalty,
+            "steps": len([r for r in history if r["phase"] == "coil"]),
+            "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
+            "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
+            "wall_time": wall,
+            "assembly_per_iteration": timing["assembly"],
+            "linear_solve_per_iteration": timing["linear_solve"],
+        },
+    }
+    if comm.rank == 0:
+        (directory / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary, model

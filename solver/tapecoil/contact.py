@@ -1,0 +1,129 @@
+"""Penalty contact of the tape's inner face with the rigid hub and with the turns beneath it.
+
+The hub is a rigid cylinder (axis along y through ``axis_point``, radius r_hub). A tape wound
+on it is a spiral: the mid-surface of turn n lies at r_hub + h/2 + n h (physics.md Sec. 2), so
+the inner face (mid-surface - h/2 d) of a point on turn n must stay outside r_hub + n h, the
+outer face of the turn beneath. Rather than searching for the nearest point of the turn below
+(general self-contact), every point carries its winding angle psi: the angle it has been carried
+round the hub, measured in the hub's rotating frame from the root. psi is updated between load
+steps from the converged state and unwrapped continuously (a point never moves by half a turn
+in one step), so that points of successive turns, which share a polar angle, keep their turn.
+The obstacle radius is then the staircase
+
+    r_obs(psi) = r_hub + h sum_{k>=1} ramp((psi - 2 pi k) / w + 1),
+
+which climbs by h over the last w radians of every turn: there the turn passes over the root
+end (and, later, over the step every turn inherits from it). ramp is the C1 smoothstep on
+[0, 1]; w is about two elements, so that the climb is resolved.
+
+Penetration g = r_obs - |P - a|_xz > 0 (P the inner-face point, a the axis) costs the penalty
+energy k/2 <g>^2 per unit reference area. The default stiffness k = E h / (100 l^2) (l the element
+length along the tape) makes the contact stiffness of an element, k l^2, one hundredth of the
+membrane stiffness E h of the element it pushes on. Measured on the benchmark coarse mesh: with
+k l^2 = E h, Newton chattered between contact sets and the run stalled at 3 rad; with E h / 100
+it coils the whole 36 rad with the largest penetration about 0.4 h (at the climbs over the root
+step, at the end of the run) and typically below 0.1 h; with E h / 10^4 the turns sank by 3 h.
+"""
+
+from __future__ import annotations
+
+import math
+
+import dolfinx
+import numpy as np
+import ufl
+
+from .shell import NaghdiShell, Nodes
+
+
+def default_penalty(E: float, h: float, element_length: float) -> float:
+    """Penalty stiffness per unit area [N/m^3]: element contact stiffness E h / 100."""
+    return 0.01 * E * h / element_length**2
+
+
+def _smoothstep(x):
+    s = ufl.min_value(ufl.max_value(x, 0.0), 1.0)
+    return s * s * (3.0 - 2.0 * s)
+
+
+class CoilContact:
+    """Contact of the tape's inner face with the hub and the wound turns (penalty, lagged psi).
+
+    ``axis_point`` is a point of the hub axis (along y) [m]; ``max_turns`` bounds the number of
+    turns the staircase holds; ``ramp_width`` [rad] is w of the module docstring.
+    """
+
+    def __init__(
+        self,
+        model: NaghdiShell,
+        axis_point: np.ndarray,
+        r_hub: float,
+        penalty: float,
+        max_turns: int,
+        ramp_width: float,
+    ):
+        self.model = model
+        self.axis_point = np.asarray(axis_point, dtype=float)
+        self.r_hub = r_hub
+        self.h = h = model.material.h
+        self.ramp_width = ramp_width
+        self.max_turns = max_turns
+        self.stiffness = dolfinx.fem.Constant(model.mesh, float(penalty))
+
+        # the winding angle lives on the Q2 nodes of the state: smooth along the tape, and its
+        # interpolant resolves the ramps of the staircase
+        self.nodes = Nodes(model)
+        self.psi = dolfinx.fem.Function(self.nodes.space, name="winding_angle")
+
+        a = ufl.as_vector(self.axis_point)
+        face = model.phi - 0.5 * h * model.d - a
+        self.radius = ufl.sqrt(face[0] ** 2 + face[2] ** 2)
+        steps = sum(
+            _smoothstep((self.psi - 2 * math.pi * k) / ramp_width + 1.0) for k in range(1, max_turns + 1)
+        )
+        self.obstacle = r_hub + h * steps
+        self.penetration = ufl.max_value(self.obstacle - self.radius, 0.0)
+        # the hub carries the first turn up to the start of its climb; beyond, turns carry turns
+        self.on_hub = ufl.conditional(ufl.lt(self.psi, 2 * math.pi - ramp_width), 1.0, 0.0)
+        density = 0.5 * self.stiffness * self.penetration**2 * model.jacobian
+        self.energy = density * model.dx
+        self.energy_hub = self.on_hub * density * model.dx
+        self.energy_coil = (1.0 - self.on_hub) * density * model.dx
+        self.hub_angle = 0.0
+
+    def obstacle_radius(self, psi: np.ndarray) -> np.ndarray:
+        """The staircase r_obs(psi) [m] in numpy (as in the forms)."""
+        k = np.arange(1, self.max_turns + 1)[:, None]
+        s = np.clip((psi[None, :] - 2 * math.pi * k) / self.ramp_width + 1.0, 0.0, 1.0)
+        return self.r_hub + self.h * np.sum(s * s * (3.0 - 2.0 * s), axis=0)
+
+    def polar(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distance from the axis and polar angle (from +x, in the xz-plane) of points (3, n)."""
+        p = points - self.axis_point[:, None]
+        return np.hypot(p[0], p[2]), np.arctan2(p[2], p[0])
+
+    def nodal_penetration(self) -> np.ndarray:
+        """Penetration r_obs - r [m] of the inner face at this rank's nodes (negative: a gap)."""
+        q = self.model.q.x.array
+        face = self.nodes.positions(q) - 0.5 * self.h * self.nodes.directors(q)
+        return self.obstacle_radius(self.psi.x.array) - self.polar(face)[0]
+
+    def _lab_angles(self) -> np.ndarray:
+        return self.polar(self.nodes.positions(self.model.q.x.array))[1]
+
+    def update(self, hub_angle: float) -> None:
+        """Winding angles from the current (converged) state at hub angle ``hub_angle`` [rad].
+
+        psi = hub_angle + pi/2 - polar angle: the root sits at polar angle pi/2 + hub_angle,
+        and material behind it in the sense of rotation has been carried round by psi. The
+        branch nearest the previous psi is taken: coiled points hardly move in the hub frame.
+        """
+        raw = hub_angle + 0.5 * math.pi - self._lab_angles()
+        previous = self.psi.x.array
+        self.psi.x.array[:] = previous + (raw - previous + math.pi) % (2 * math.pi) - math.pi
+        self.hub_angle = hub_angle
+
+    def reset(self) -> None:
+        """Winding angles of the reference state (hub angle 0): psi in [0, pi/2) on the flat tape."""
+        self.psi.x.array[:] = 0.5 * math.pi - self._lab_angles()
+        self.hub_angle = 0.0

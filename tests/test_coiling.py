@@ -1,0 +1,146 @@
+"""Coiling: hub attachment, contact obstacle, winding angles, a short coiling run, checkpoints."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from tapecoil.config import CoilingConfig, Config, TapeConfig
+
+
+def short_tape(hub_angle=1.0, L=0.12) -> Config:
+    """The benchmark section on a short tape, coarse mesh: a run of seconds."""
+    cfg = Config()
+    return dataclasses.replace(
+        cfg,
+        tape=dataclasses.replace(TapeConfig(), L=L),
+        coiling=dataclasses.replace(CoilingConfig(), hub_angle=hub_angle),
+        mesh=dataclasses.replace(cfg.mesh, preset="coarse"),
+    )
+
+
+@pytest.fixture(scope="module")
+def coiled_short():
+    """A short tape flattened and coiled by 1 rad on one rank (shared by the tests below)."""
+    from tapecoil.coiling import CoilingModel, CoilingRun
+
+    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    run = CoilingRun(model)
+    run.flatten()
+    run.coil(1.0)
+    return model, run.result.history
+
+
+def test_hub_root_section_flattens_and_turns_onto_the_hub(cfg):
+    from tapecoil.boundary import HubRoot
+    from tapecoil.coiling import CoilingModel
+
+    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    root: HubRoot = model.root
+    s = np.linspace(-cfg.tape.b / 2, cfg.tape.b / 2, 41)
+    xi = np.vstack([np.zeros_like(s), s])
+    curved, d0 = root.section(xi, 0.0)
+    assert np.allclose(curved, model.strip.geometry.phi0(xi), atol=1e-15)
+    assert np.allclose(d0, model.strip.geometry.frame(xi)[2], atol=1e-14)
+    flat, d1 = root.section(xi, 1.0)
+    assert np.allclose(flat[1], s) and np.allclose(flat[2], 0.0)
+    assert np.allclose(d1, [[0.0], [0.0], [1.0]])
+    # the flattened section keeps its length for any f (inextensible)
+    for f in (0.3, 0.7):
+        p, _ = root.section(xi, f)
+        assert np.sum(np.linalg.norm(np.diff(p, axis=1), axis=0)) == pytest.approx(cfg.tape.b, rel=1e-3)
+    # turned by the hub angle, the flat root's centre line stays on the hub's mid-surface radius
+    # and has moved towards -x (the coiling sense)
+    root.set(1.0, 0.8)
+    u = root.values[0]
+    x = u.function_space.tabulate_dof_coordinates()
+    centre = np.argmin(np.abs(x[:, 1]) + np.abs(x[:, 0]))
+    pos = model.strip.geometry.phi0(x[centre, :2, None])[:, 0] + u.x.array.reshape(-1, 3)[centre]
+    rel = pos - model.axis_point
+    assert math.hypot(rel[0], rel[2]) == pytest.approx(cfg.hub.radius + cfg.tape.h / 2, rel=1e-12)
+    assert math.atan2(rel[2], rel[0]) == pytest.approx(math.pi / 2 + 0.8, rel=1e-12)
+
+
+def test_obstacle_staircase_climbs_one_thickness_per_turn():
+    from tapecoil.coiling import CoilingModel
+
+    model = CoilingModel(short_tape(hub_angle=20.0), MPI.COMM_SELF)
+    c = model.contact
+    w, h, r = c.ramp_width, c.h, c.r_hub
+    psi = np.array(
+        [0.0, 2 * math.pi - w - 1e-9, 2 * math.pi - w / 2, 2 * math.pi, 3 * math.pi, 4 * math.pi + 0.1]
+    )
+    expected = np.array([r, r, r + h / 2, r + h, r + h, r + 2 * h])
+    assert np.allclose(c.obstacle_radius(psi), expected, rtol=0, atol=1e-15)
+
+
+def test_winding_angle_is_unwrapped_from_step_to_step():
+    from tapecoil.coiling import CoilingModel
+
+    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    c = model.contact
+    psi0 = c.psi.x.array.copy()
+    # on the straight tape: 0 at the root (on top of the hub), rising along it towards pi/2
+    assert abs(psi0.min()) < 1e-12 and 1.0 < psi0.max() < math.pi / 2
+    # turning every point rigidly about the axis by 5 rad in 0.5 rad steps (as the coil does)
+    # leaves psi unchanged in the hub frame
+    nodes = c.nodes
+    from tapecoil.boundary import rotation_matrix
+
+    q = model.model.q.x.array
+    x0 = nodes.reference
+    a = model.axis_point[:, None]
+    for angle in np.arange(0.5, 5.01, 0.5):
+        x = rotation_matrix(np.array([0.0, -1.0, 0.0]), angle) @ (x0 - a) + a
+        q[nodes.u_dofs] = (x - x0).T
+        c.update(angle)
+    assert np.allclose(c.psi.x.array, psi0, atol=1e-9)
+
+
+def test_short_coil_wraps_onto_the_hub(coiled_short, cfg):
+    _, history = coiled_short
+    coil = [r for r in history if r["phase"] == "coil"]
+    assert coil[-1]["hub_angle"] == pytest.approx(1.0)
+    h, r_hub = cfg.tape.h, cfg.hub.radius
+    # the wound length is the mid-surface arc r_hub + h/2 times the angle, to a few percent
+    # (the ploy region lifts off just before the tangent point)
+    assert coil[-1]["coiled_length"] == pytest.approx((r_hub + h / 2) * 1.0, rel=0.05)
+    # the free end has slid towards the hub by about the same length
+    assert -coil[-1]["end_slide"] == pytest.approx(coil[-1]["coiled_length"], rel=0.05)
+    # contact holds: penetration a small fraction of the thickness
+    assert max(r["max_penetration"] for r in coil) < 0.2 * h
+    # the tension carried at the free end is the pull (force control)
+    assert coil[-1]["tension"] == pytest.approx(cfg.coiling.tension, rel=1e-6)
+    # the stored energy grows with the hub angle at about w b r per radian
+    energy = np.array([r["strain_energy"] for r in coil])
+    assert np.all(np.diff(energy) > 0)
+    assert all(math.isfinite(v) for r in history for v in r.values() if isinstance(v, float))
+
+
+def test_checkpoint_round_trip(coiled_short, tmp_path):
+    from tapecoil.coiling import read_checkpoint, write_checkpoint
+
+    model, _ = coiled_short
+    res = model.strip.resolution
+    meta = {
+        "hub_angle": model.root.angle,
+        "tension": float(model.tension.value),
+        "completed": True,
+        "resolution": {"across": res.across, "along": res.along, "grading": res.grading},
+    }
+    write_checkpoint(model, tmp_path / "stowed", meta)
+    restored, meta2 = read_checkpoint(tmp_path / "stowed", model.config, MPI.COMM_SELF)
+    assert meta2["hub_angle"] == pytest.approx(1.0)
+    e0, e1 = model.energies(), restored.energies()
+    for key in ("membrane", "bending", "shear", "contact"):
+        assert e1[key] == pytest.approx(e0[key], rel=1e-10, abs=1e-14)
+    assert np.allclose(np.sort(restored.contact.psi.x.array), np.sort(model.contact.psi.x.array))
+
+
+def test_bad_coiling_config_is_rejected_before_computing():
+    from tapecoil.config import ConfigError, config_from_dict
+
+    with pytest.raises(ConfigError, match=r"coiling\.hub_angle"):
+        config_from_dict({"coiling": {"hub_angle": -1.0}})
