@@ -144,3 +144,22 @@ def test_bad_coiling_config_is_rejected_before_computing():
 
     with pytest.raises(ConfigError, match=r"coiling\.hub_angle"):
         config_from_dict({"coiling": {"hub_angle": -1.0}})
+
+
+@pytest.mark.mpi
+def test_two_ranks_coil_as_one():
+    """The same short coiling run distributed over the ranks and on each rank alone."""
+    from tapecoil.coiling import CoilingModel, CoilingRun
+
+    def coil(comm):
+        model = CoilingModel(short_tape(hub_angle=0.5), comm)
+        run = CoilingRun(model)
+        run.flatten()
+        run.coil(0.5)
+        return run.result.history[-1]
+
+    parallel, serial = coil(MPI.COMM_WORLD), coil(MPI.COMM_SELF)
+    assert MPI.COMM_WORLD.size > 1
+    for key in ("strain_energy", "bending_energy", "coiled_length", "outer_radius", "end_slide"):
+        assert parallel[key] == pytest.approx(serial[key], rel=1e-6), key
+    assert parallel["hub_angle"] == serial["hub_angle"]
