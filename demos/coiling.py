@@ -142,7 +142,7 @@ if comm.size == 1:
         center=model.axis_point,
         direction=(0, 1, 0),
         radius=config.hub.radius,
-        height=1.2 * config.tape.b,
+        height=0.2 * config.tape.b,  # a short hub, so that the coil shows
         resolution=120,
     )
     kx, _ = model.model.curvatures()
@@ -152,7 +152,8 @@ if comm.size == 1:
         scalar=-kx * config.tape.R,
         name="kappa_long R",
         title=f"stowed: hub angle {summary['hub_angle']:.1f} rad",
-        camera=((0.25, -1.0, 0.15),),
+        camera=((0.4, -1.0, 0.3),),
+        clim=(0.0, 1.5),
         extra=[(hub, {"color": "tan", "opacity": 1.0})],
     )
     print("wrote", path)

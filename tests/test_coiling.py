@@ -163,3 +163,30 @@ def test_two_ranks_coil_as_one():
     for key in ("strain_energy", "bending_energy", "coiled_length", "outer_radius", "end_slide"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-6), key
     assert parallel["hub_angle"] == serial["hub_angle"]
+
+
+def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
+    """Coil to 0.5 rad, stop, resume from the checkpoint to 1 rad: as if never stopped."""
+    import csv
+    import json
+
+    from tapecoil.coiling import run_coiling
+
+    half, _ = run_coiling(short_tape(hub_angle=0.5), tmp_path / "half", MPI.COMM_SELF, progress=False)
+    assert half["completed"]
+    resumed, _ = run_coiling(
+        short_tape(hub_angle=1.0), tmp_path / "resumed", MPI.COMM_SELF, resume=tmp_path / "half" / "stowed",
+        progress=False,
+    )
+    direct, _ = run_coiling(short_tape(hub_angle=1.0), tmp_path / "direct", MPI.COMM_SELF, progress=False)
+    assert resumed["completed"] and direct["completed"]
+    last = {}
+    for name in ("resumed", "direct"):
+        rows = list(csv.DictReader((tmp_path / name / "history.csv").open()))
+        last[name] = rows[-1]
+        assert json.loads((tmp_path / name / "summary.json").read_text())["hub_angle"] == pytest.approx(1.0)
+    # the resumed history starts at the checkpoint's angle
+    first = next(csv.DictReader((tmp_path / "resumed" / "history.csv").open()))
+    assert float(first["hub_angle"]) > 0.5
+    for key in ("strain_energy", "coiled_length", "end_slide"):
+        assert float(last["resumed"][key]) == pytest.approx(float(last["direct"][key]), rel=1e-5), key

@@ -37,6 +37,13 @@ def facet_condition(model: NaghdiShell, sub: tuple[int, ...], facets: np.ndarray
     return value, dolfinx.fem.dirichletbc(value, dofs, space)
 
 
+def edge_conditions(model: NaghdiShell, tag: int):
+    """Dirichlet conditions on the whole state (u and theta) of the edge ``tag``: (values, bcs)."""
+    facets = model.strip.facet_tags.find(tag)
+    conditions = [facet_condition(model, (i,), facets) for i in (0, 1)]
+    return [value for value, _ in conditions], [bc for _, bc in conditions]
+
+
 @dataclass
 class EdgeMotion:
     """Dirichlet conditions holding the edge ``tag`` to a rigid motion of the reference edge.
@@ -52,10 +59,7 @@ class EdgeMotion:
     axis_point: np.ndarray
 
     def __post_init__(self):
-        facets = self.model.strip.facet_tags.find(self.tag)
-        conditions = [facet_condition(self.model, (i,), facets) for i in (0, 1)]
-        self.values = [value for value, _ in conditions]
-        self.bcs = [bc for _, bc in conditions]
+        self.values, self.bcs = edge_conditions(self.model, self.tag)
         self.angle = 0.0
 
     def set(self, angle: float, translation=(0.0, 0.0, 0.0)) -> None:
@@ -143,10 +147,7 @@ class HubRoot:
     R: float
 
     def __post_init__(self):
-        facets = self.model.strip.facet_tags.find(self.tag)
-        conditions = [facet_condition(self.model, (i,), facets) for i in (0, 1)]
-        self.values = [value for value, _ in conditions]
-        self.bcs = [bc for _, bc in conditions]
+        self.values, self.bcs = edge_conditions(self.model, self.tag)
         self.flattening = 0.0
         self.angle = 0.0
 

@@ -356,7 +356,7 @@ class CoilingRun:
             self.on_step(row)
         return row
 
-    def _continuation(self, set_load, control, predict=None, on_converged=None):
+    def _continuation(self, set_load, control, predict=None):
         m = self.m
         relax = Relaxation(
             m.viscosity, m.previous, scale=10 * m.config.tape.D / m.element_length**4, max_iterations=100
@@ -473,7 +473,6 @@ def read_checkpoint(
     model.model.q.x.scatter_forward()
     model.contact.hub_angle = meta["hub_angle"]
     model.root.set(1.0, meta["hub_angle"])
-    model.set_flattening  # noqa: B018 (the tension is restored below)
     if model.tension_control == "force":
         model.tension.value = meta["tension"]
     return model, meta
