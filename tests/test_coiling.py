@@ -175,7 +175,10 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
     half, _ = run_coiling(short_tape(hub_angle=0.5), tmp_path / "half", MPI.COMM_SELF, progress=False)
     assert half["completed"]
     resumed, _ = run_coiling(
-        short_tape(hub_angle=1.0), tmp_path / "resumed", MPI.COMM_SELF, resume=tmp_path / "half" / "stowed",
+        short_tape(hub_angle=1.0),
+        tmp_path / "resumed",
+        MPI.COMM_SELF,
+        resume=tmp_path / "half" / "stowed",
         progress=False,
     )
     direct, _ = run_coiling(short_tape(hub_angle=1.0), tmp_path / "direct", MPI.COMM_SELF, progress=False)
