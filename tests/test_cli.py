@@ -47,3 +47,24 @@ def test_config_command_round_trips(tmp_path, capsys):
 def test_console_script():
     out = subprocess.run(["tapecoil", "theory", "--json"], capture_output=True, text=True, check=True).stdout
     assert json.loads(out)["predictions"]["coiling_tension"]["value"] == pytest.approx(0.3842, rel=1e-3)
+
+
+def test_coil_refuses_bad_input_before_computing(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text("[coiling]\ntension = -1.0\n")
+    assert main(["coil", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "coiling.tension" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()  # nothing was started
+
+
+def test_coil_short_run_writes_results(tmp_path, capsys):
+    import json
+
+    path = tmp_path / "short.toml"
+    path.write_text("[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.3\n[mesh]\npreset = 'coarse'\n")
+    out = tmp_path / "out"
+    assert main(["coil", str(path), "--out", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["completed"] and summary["hub_angle"] == 0.3
+    for name in ("config.toml", "history.csv", "summary.json", "coil.bp", "stowed/meta.json"):
+        assert (out / name).exists(), name
