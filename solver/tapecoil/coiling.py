@@ -104,7 +104,7 @@ class CoilingModel:
         max_turns = math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1
         # the climb over the root end spread over about two elements (at least 0.3 rad)
         ramp = max(2 * self.element_length / r_hub, 0.3)
-        smoothing = cc.smoothing or tp.h / 20
+        smoothing = cc.smoothing * tp.h
         self.contact = CoilContact(model, self.axis_point, r_hub, self.penalty, max_turns, ramp, smoothing)
         self.contact.reset()
 
@@ -302,8 +302,10 @@ class CoilingRun:
     max_step = 0.3  # rad
     easy_iterations = 8
 
-    def __init__(self, model: CoilingModel, on_step=None):
+    def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None):
         self.m = model
+        if max_step is not None:
+            self.max_step = max_step
         self.on_step = on_step
         self.result = CoilingResult()
         self._last_potential = None
@@ -386,7 +388,7 @@ class CoilingRun:
         base = m.config.solver
         control = dataclasses.replace(
             base,
-            initial_step=min(0.05 / span, 1.0),
+            initial_step=min(min(0.05, self.max_step) / span, 1.0),
             max_step=min(self.max_step / span, 1.0),
             min_step=min(base.min_step, 1e-4 / span),
         )
@@ -729,6 +731,8 @@ def run_coiling(
             "penalty": model.penalty,
             "steps": len([r for r in history if r["phase"] == "coil"]),
             "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
+            # including the attempts that failed and were cut back
+            "newton_iterations_total": int(model.solver.timings["iterations"]),
             "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
             "wall_time": wall,
             "assembly_per_iteration": timing["assembly"],
@@ -749,6 +753,7 @@ def coiling_tension_study(
     excess: float = 0.6,
     preset: str = "default",
     comm=MPI.COMM_WORLD,
+    max_step: float = 0.05,
 ) -> list[dict]:
     """The steady coiling tension on hubs of radius r_c = ratio * R, against Eq. 2.6.
 
@@ -757,6 +762,11 @@ def coiling_tension_study(
     the hub. The coiling tension T - N (N: the axial force carried into the root, see
     :meth:`CoilingModel.root_tension`) oscillates as nodes pass the lift-off point; its mean
     over the hub angles in ``window`` (the steady phase, after the start-up) is the measured value.
+    Steps are kept to ``max_step`` [rad], a third of the node passing period on the default mesh,
+    so that the samples resolve the oscillation. The contact bracket is the plain one: the
+    smoothed bracket (``contact.smoothing``) holds the tape a few smoothing widths off the coil,
+    which lowers the measured tension by about 0.03 N (0.185 N against 0.218 N at r_c/R = 0.9
+    with the default h/20; 0.2186 N with h/200 and 0.2190 N with the plain bracket).
     """
     tp = config.tape
     out = []
@@ -769,10 +779,11 @@ def coiling_tension_study(
             hub=dataclasses.replace(config.hub, radius=r_c),
             coiling=dataclasses.replace(config.coiling, hub_angle=hub_angle, tension=reference + excess),
             mesh=dataclasses.replace(config.mesh, preset=preset),
+            contact=dataclasses.replace(config.contact, smoothing=0.0),
         )
         t0 = time.perf_counter()
         model = CoilingModel(case, comm)
-        run = CoilingRun(model)
+        run = CoilingRun(model, max_step=max_step)
         run.flatten()
         run.coil(hub_angle)
         rows = [

@@ -210,12 +210,13 @@ class ContactConfig:
         penalty: penalty stiffness per unit area [N/m^3]; 0 derives it from the shell stiffness
             and the mesh size (see the contact module).
         penalty_scale: factor on the derived penalty [-].
-        smoothing: width of the smoothed contact bracket [m]; 0 takes h/20 (see the contact module).
+        smoothing: width of the smoothed contact bracket as a fraction of the thickness h [-];
+            0 is the plain bracket max(g, 0) (see the contact module for the trade-off).
     """
 
     penalty: float = param(0.0, "N/m^3", NON_NEGATIVE)
     penalty_scale: float = param(1.0, "-", POSITIVE)
-    smoothing: float = param(0.0, "m", NON_NEGATIVE)
+    smoothing: float = param(0.05, "-", Range(0.0, 1.0))
 
 
 @dataclass
