@@ -82,7 +82,11 @@ if rank0:
             e = m[key]
             row = f"computed {e['computed']:.5g}  reference {e['reference']:.5g}  error {e['error']:.2%}"
             print(f"  {key:<24} {row}")
-    print("  ploy length", json.dumps({k: v for k, v in m["ploy_length"].items() if k != "quantity"}))
+    for key in ("ploy_length_one_turn", "ploy_length"):
+        if key in m:
+            print(
+                f"  {key}", json.dumps({k: v for k, v in m[key].items() if k not in ("quantity", "profile")})
+            )
 
 # %% [markdown]
 # ## Histories against the theory
@@ -110,7 +114,11 @@ if rank0:
     ax[0].plot(angle, energy, label="shell, whole tape")
     ax[0].plot(angle, ref_energy, "--", label="plate estimate, coiled length")
     ax[0].set(xlabel="hub angle [rad]", ylabel="strain energy [J]", title="stored energy")
-    ax[1].plot(angle, radius * 1e3, label="shell: outer face, half a turn behind the tangent point")
+    # before half a turn the probe would sit at the lift-off point: not a coil radius yet
+    wound = angle > np.pi
+    ax[1].plot(
+        angle[wound], radius[wound] * 1e3, label="shell: outer face, half a turn behind the tangent point"
+    )
     ax[1].plot(
         angle,
         [theory.outer_radius_after_rotation(a, r_hub, tp.h) * 1e3 for a in angle],
@@ -118,9 +126,13 @@ if rank0:
         label="r_hub + h theta / 2 pi",
     )
     ax[1].set(xlabel="hub angle [rad]", ylabel="outer radius [mm]", title="coil radius")
-    ax[2].plot(angle[1:], torque[1:] * 1e3)
-    ax[2].set(xlabel="hub angle [rad]", ylabel="hub torque [N mm]", title="hub torque (energy balance)")
-    for a in ax[:2]:
+    ax[2].plot(angle[1:], torque[1:] * 1e3, label="shell (secant of the energy balance)")
+    # steady coiling: each radian winds r of tape, storing b w(r) per metre, against the pull T
+    rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
+    steady = rho * (config.coiling.tension + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
+    ax[2].plot(angle, steady * 1e3, "--", label="r (T + b w(r))")
+    ax[2].set(xlabel="hub angle [rad]", ylabel="hub torque [N mm]", title="hub torque")
+    for a in ax:
         a.legend(fontsize=8)
     for a in ax:
         a.grid(alpha=0.3)

@@ -320,8 +320,10 @@ class CoilingRun:
         tension = m.end_reaction()
         root_tension = m.root_tension()
         # hub torque from the energy balance of the step: work of the hub = change of stored
-        # energy + work against the pull (secant over the step)
-        potential = e["strain"] + e["contact"] - tension * slide
+        # energy + work against the pull (secant over the step). The applied pull, not the
+        # measured one: its small noise times the whole slide would swamp a short step
+        pull = float(m.tension.value) if m.tension_control == "force" else tension
+        potential = e["strain"] + e["contact"] - pull * slide
         torque = float("nan")
         if phase == "coil" and self._last_potential is not None and step.step > 0:
             torque = (potential - self._last_potential) / step.step
