@@ -102,7 +102,8 @@ if rank0:
     energy = np.array([float(r["strain_energy"]) for r in rows])
     coiled = np.array([float(r["coiled_length"]) for r in rows])
     radius = np.array([float(r["outer_radius"]) for r in rows])
-    torque = np.array([float(r["hub_torque"]) for r in rows])
+    # the torque is undefined (empty) at the first step and across snaps passed by relaxation
+    torque = np.array([float(r["hub_torque"]) if r["hub_torque"] else np.nan for r in rows])
     tp, r_hub = config.tape, config.hub.radius
     ref_energy = [
         theory.stored_energy(
@@ -126,7 +127,7 @@ if rank0:
         label="r_hub + h theta / 2 pi",
     )
     ax[1].set(xlabel="hub angle [rad]", ylabel="outer radius [mm]", title="coil radius")
-    ax[2].plot(angle[1:], torque[1:] * 1e3, label="shell (secant of the energy balance)")
+    ax[2].plot(angle, torque * 1e3, label="shell (secant of the energy balance)")
     # steady coiling: each radian winds r of tape, storing b w(r) per metre, against the pull T
     rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
     steady = rho * (config.coiling.tension + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))

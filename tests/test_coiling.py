@@ -117,6 +117,15 @@ def test_short_coil_wraps_onto_the_hub(coiled_short, cfg):
     energy = np.array([r["strain_energy"] for r in coil])
     assert np.all(np.diff(energy) > 0)
     assert all(math.isfinite(v) for r in history for v in r.values() if isinstance(v, float))
+    # hub torque from the energy balance against steady coiling: each radian winds r of tape,
+    # storing b w(r) per metre, against the pull T (the last steps, past the start-up)
+    from tapecoil import theory
+
+    tp = cfg.tape
+    rho = r_hub + h / 2
+    steady = rho * (cfg.coiling.tension + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
+    late = [r["hub_torque"] for r in coil if r["hub_angle"] > 0.6 and r["hub_torque"] != ""]
+    assert late and np.median(late) == pytest.approx(steady, rel=0.10)
 
 
 def test_checkpoint_round_trip(coiled_short, tmp_path):

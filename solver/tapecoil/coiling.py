@@ -324,8 +324,10 @@ class CoilingRun:
         # measured one: its small noise times the whole slide would swamp a short step
         pull = float(m.tension.value) if m.tension_control == "force" else tension
         potential = e["strain"] + e["contact"] - pull * slide
-        torque = float("nan")
-        if phase == "coil" and self._last_potential is not None and step.step > 0:
+        # undefined (an empty cell) for the first step and across a snap passed by relaxation,
+        # where stored energy is released without work of the hub
+        torque = ""
+        if phase == "coil" and self._last_potential is not None and step.step > 0 and not step.relaxed:
             torque = (potential - self._last_potential) / step.step
         self._last_potential = potential
         row = {
@@ -352,9 +354,6 @@ class CoilingRun:
             "outer_radius": geometry["outer_radius"],
             "wall_time": time.perf_counter() - self._t0,
         }
-        # the first coiling row has no torque yet: 0 rather than NaN in the files
-        if not math.isfinite(row["hub_torque"]):
-            row["hub_torque"] = 0.0
         self.result.history.append(row)
         if self.on_step is not None:
             self.on_step(row)
