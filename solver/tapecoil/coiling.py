@@ -217,27 +217,23 @@ class CoilingModel:
         b.scatter_reverse(dolfinx.la.InsertMode.add)
         return b.array
 
-    def end_reaction(self) -> float:
-        """Tension carried by the tape at the free end [N]: the internal force along +x there.
+    def edge_forces(self) -> dict[str, float]:
+        """Forces at the two ends from one assembly of the internal force [N] (collective).
 
-        What the pull (force control) or the guide (displacement control) holds.
-        """
-        f = self.internal_force()
-        return self.comm.allreduce(float(f[self._end_dofs].sum()), op=MPI.SUM)
-
-    def root_tension(self) -> float:
-        """Axial force N the tape carries into the root attachment [N] (tension positive).
-
-        The internal force on the root edge along the tape's direction there, (cos, 0, sin) of
-        the hub angle. With frictionless contact, N + M kappa - U is the same all along the tape
-        (the configurational force balance of physics.md Sec. 5), so T - N is the coiling
-        tension M kappa - U of the first turn: Eq. 2.6 for a flattened coil.
+        ``tension``: the internal force along +x on the free end, what the pull (force control)
+        or the guide (displacement control) holds. ``root_tension``: the axial force N the tape
+        carries into the root attachment (tension positive), the internal force on the root edge
+        along the tape's direction there, (cos, 0, sin) of the hub angle. With frictionless
+        contact, N + M kappa - U is the same all along the tape (the configurational force
+        balance of physics.md Sec. 5), so T - N is the coiling tension M kappa - U of the first
+        turn: Eq. 2.6 for a flattened coil.
         """
         f = self.internal_force()
         angle = self.root.angle
         direction = (math.cos(angle), 0.0, math.sin(angle))
-        local = sum(direction[i] * float(f[dofs].sum()) for i, dofs in enumerate(self._root_dofs))
-        return -self.comm.allreduce(local, op=MPI.SUM)
+        root = sum(direction[i] * float(f[dofs].sum()) for i, dofs in enumerate(self._root_dofs))
+        end, root = self.comm.allreduce(np.array([float(f[self._end_dofs].sum()), root]), op=MPI.SUM)
+        return {"tension": float(end), "root_tension": -float(root)}
 
     def centre_line(self) -> dict[str, np.ndarray]:
         """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
@@ -317,8 +313,8 @@ class CoilingRun:
         e = m.energies()
         slide = m.end_slide()
         geometry = m.coil_geometry(angle)
-        tension = m.end_reaction()
-        root_tension = m.root_tension()
+        forces = m.edge_forces()
+        tension, root_tension = forces["tension"], forces["root_tension"]
         # hub torque from the energy balance of the step: work of the hub = change of stored
         # energy + work against the pull (secant over the step). The applied pull, not the
         # measured one: its small noise times the whole slide would swamp a short step
@@ -440,13 +436,12 @@ def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict) -> None:
 
 
 def _checkpoint_functions(model: CoilingModel) -> dict:
+    """The functions a checkpoint holds: u and theta (collapsed copies) and the winding angle."""
     out = {}
     for name, i in (("displacement", 0), ("rotation", 1)):
         V, dofs = model.model.W.sub(i).collapse()
-        f = dolfinx.fem.Function(V, name=name)
-        f.x.array[:] = model.model.q.x.array[dofs]
-        out[name] = (f, dofs)
-    out = {name: f for name, (f, _) in out.items()}
+        out[name] = dolfinx.fem.Function(V, name=name)
+        out[name].x.array[:] = model.model.q.x.array[dofs]
     out["winding_angle"] = model.contact.psi
     return out
 
@@ -761,7 +756,7 @@ def coiling_tension_study(
     For each hub, a ``length`` piece of the configured tape is flattened and coiled by
     ``hub_angle`` (under a turn) with the pull T = Eq. 2.6 + ``excess`` [N], enough to keep it on
     the hub. The coiling tension T - N (N: the axial force carried into the root, see
-    :meth:`CoilingModel.root_tension`) oscillates as nodes pass the lift-off point; its mean
+    :meth:`CoilingModel.edge_forces`) oscillates as nodes pass the lift-off point; its mean
     over the hub angles in ``window`` (the steady phase, after the start-up) is the measured value.
     Steps are kept to ``max_step`` [rad], a third of the node passing period on the default mesh,
     so that the samples resolve the oscillation. The contact bracket is the plain one: the
