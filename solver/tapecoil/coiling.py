@@ -52,6 +52,7 @@ from .geometry import (
 )
 from .shell import NaghdiShell, ShellMaterial
 from .solvers import SNESSolver
+from .verification import _cell_midpoint_values, _global_scalar
 
 # the pull at the free end rises with the flattening; the guide line is the hub's top tangent
 _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
@@ -60,10 +61,6 @@ _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
 def _smoothstep(x: np.ndarray) -> np.ndarray:
     s = np.clip(x, 0.0, 1.0)
     return s * s * (3.0 - 2.0 * s)
-
-
-def _scalar(comm, form) -> float:
-    return comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
 
 
 class CoilingModel:
@@ -186,14 +183,14 @@ class CoilingModel:
 
     # -- measures -------------------------------------------------------------------------
     def energies(self) -> dict[str, float]:
-        out = {name: _scalar(self.comm, form) for name, form in self.forms.items()}
+        out = {name: _global_scalar(self.model, form) for name, form in self.forms.items()}
         out["strain"] = out["membrane"] + out["bending"] + out["shear"]
         out["contact"] = out["contact_hub"] + out["contact_coil"]
         return out
 
     def end_slide(self) -> float:
         """Mean displacement of the free end along the guide (+x) [m]."""
-        return _scalar(self.comm, self.end_slide_form)
+        return _global_scalar(self.model, self.end_slide_form)
 
     def _edge_dofs(self, tag: int, component: int) -> np.ndarray:
         """Owned W-dofs of displacement component ``component`` on the edge ``tag``."""
@@ -489,8 +486,6 @@ def ploy_measure(model: CoilingModel, coiled=None, xi1=None, xi2=None, k_trans=N
     transverse curvature rises from 0.1/R to 0.9/R. None when the free part is too short for
     the section to recover (near the end of the coiling run). Cell values may be passed in.
     """
-    from .verification import _cell_midpoint_values
-
     tp = model.config.tape
     if coiled is None:
         coiled = model.coil_geometry(model.root.angle)["coiled_length"]
@@ -528,8 +523,6 @@ def coil_measures(model: CoilingModel) -> dict:
     and from the tangent point, away from the climbs over the root step, over the inner 60 % of
     the width (the thesis's comparison region; the free edges carry a boundary layer).
     """
-    from .verification import _cell_midpoint_values
-
     cfg = model.config
     tp, r_hub, h = cfg.tape, model.r_hub, cfg.tape.h
     comm = model.comm
@@ -546,7 +539,7 @@ def coil_measures(model: CoilingModel) -> dict:
     # energy: the coiled part (psi behind the tangent point) against the plate estimate for the
     # spiral of that length; the whole tape's strain energy includes the ploy region
     wound = ufl.conditional(ufl.lt(contact.psi, angle), 1.0, 0.0)
-    coiled_energy = sum(_scalar(comm, dolfinx.fem.form(f)) for f in m.energy_forms(wound))
+    coiled_energy = sum(_global_scalar(m, f) for f in m.energy_forms(wound))
     wound_angle = theory.rotation_for_coiled_length(coiled, r_hub, h)
     reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu)
     total = model.energies()
