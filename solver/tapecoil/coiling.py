@@ -67,9 +67,7 @@ class CoilingModel:
     """The tape, hub, attachment, guide, contact and solver of a coiling run.
 
     ``strip``: an existing strip mesh (a restart); otherwise one is built from ``config`` (or
-    ``resolution``). ``tension_control``: "force" pulls the free end with T; "displacement"
-    prescribes the free end's slide along the guide (``set_slide``) and the tension is the
-    reaction there.
+    ``resolution``). The free end is pulled by the force T (``coiling.tension``).
     """
 
     def __init__(
@@ -78,10 +76,7 @@ class CoilingModel:
         comm=MPI.COMM_WORLD,
         resolution: MeshResolution | None = None,
         strip: StripMesh | None = None,
-        tension_control: str = "force",
     ):
-        if tension_control not in ("force", "displacement"):
-            raise ValueError(f"tension_control must be 'force' or 'displacement', got {tension_control!r}")
         self.config = config
         self.comm = comm
         tp, r_hub = config.tape, config.hub.radius
@@ -108,12 +103,7 @@ class CoilingModel:
         free_end = strip.facet_tags.find(FREE_END)
         self.guide = [facet_condition(model, sub, free_end) for sub in _GUIDE_COMPONENTS]
         bcs = self.root.bcs + [bc for _, bc in self.guide]
-        self.tension_control = tension_control
         self.tension = dolfinx.fem.Constant(strip.mesh, 0.0)
-        self.slide = None
-        if tension_control == "displacement":
-            self.slide, slide_bc = facet_condition(model, (0, 0), free_end)
-            bcs.append(slide_bc)
         self.bcs = bcs
 
         # the pull: T spread evenly over the free end's arc; its work is T times the end's mean u_x
@@ -121,7 +111,7 @@ class CoilingModel:
         pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
         self.energy = model.strain_energy + self.contact.energy
         self.viscosity, self.previous, viscous = model.relaxation(length_scale=self.element_length)
-        potential = self.energy - (pull_work if tension_control == "force" else 0)
+        potential = self.energy - pull_work
         self.residual_form = ufl.derivative(potential, model.q, model.dq)
         F = self.residual_form + viscous
         self.solver = SNESSolver.from_config(F, model.jacobian_form(F), model.q, bcs, config.solver)
@@ -141,15 +131,10 @@ class CoilingModel:
     # -- loading --------------------------------------------------------------------------
     def set_flattening(self, f: float) -> None:
         self.root.set(f, 0.0)
-        if self.tension_control == "force":
-            self.tension.value = f * self.config.coiling.tension
+        self.tension.value = f * self.config.coiling.tension
 
     def set_hub_angle(self, angle: float) -> None:
         self.root.set(1.0, angle)
-
-    def set_slide(self, distance: float) -> None:
-        """Displacement control: the free end's slide along the guide, towards the hub [m]."""
-        self.slide.x.array[:] = -distance
 
     def predict(self, angle_from: float, angle_to: float) -> None:
         """Initial guess at ``angle_to`` from the converged states at ``angle_from`` and before.
@@ -217,8 +202,7 @@ class CoilingModel:
     def edge_forces(self) -> dict[str, float]:
         """Forces at the two ends from one assembly of the internal force [N] (collective).
 
-        ``tension``: the internal force along +x on the free end, what the pull (force control)
-        or the guide (displacement control) holds. ``root_tension``: the axial force N the tape
+        ``tension``: the internal force along +x on the free end, what the pull holds. ``root_tension``: the axial force N the tape
         carries into the root attachment (tension positive), the internal force on the root edge
         along the tape's direction there, (cos, 0, sin) of the hub angle. With frictionless
         contact, N + M kappa - U is the same all along the tape (the configurational force
@@ -315,7 +299,7 @@ class CoilingRun:
         # hub torque from the energy balance of the step: work of the hub = change of stored
         # energy + work against the pull (secant over the step). The applied pull, not the
         # measured one: its small noise times the whole slide would swamp a short step
-        pull = float(m.tension.value) if m.tension_control == "force" else tension
+        pull = float(m.tension.value)
         potential = e["strain"] + e["contact"] - pull * slide
         # undefined (an empty cell) for the first step and across a snap passed by relaxation,
         # where stored energy is released without work of the hub
@@ -443,9 +427,7 @@ def _checkpoint_functions(model: CoilingModel) -> dict:
     return out
 
 
-def read_checkpoint(
-    path: str | Path, config: Config, comm=MPI.COMM_WORLD, **kwargs
-) -> tuple[CoilingModel, dict]:
+def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[CoilingModel, dict]:
     """A :class:`CoilingModel` in the state written by :func:`write_checkpoint` (any rank count)."""
     import adios4dolfinx
 
@@ -458,7 +440,7 @@ def read_checkpoint(
     tp = config.tape
     res = MeshResolution(**meta["resolution"])
     strip = StripMesh(mesh, cells, facets, StripGeometry(tp.R, tp.b, tp.L), res)
-    model = CoilingModel(config, comm, strip=strip, **kwargs)
+    model = CoilingModel(config, comm, strip=strip)
     for name, i in (("displacement", 0), ("rotation", 1)):
         V, dofs = model.model.W.sub(i).collapse()
         f = dolfinx.fem.Function(V)
@@ -468,8 +450,7 @@ def read_checkpoint(
     model.model.q.x.scatter_forward()
     model.contact.hub_angle = meta["hub_angle"]
     model.root.set(1.0, meta["hub_angle"])
-    if model.tension_control == "force":
-        model.tension.value = meta["tension"]
+    model.tension.value = meta["tension"]
     return model, meta
 
 
