@@ -203,9 +203,9 @@ class CoilingModel:
         """Forces at the two ends from one assembly of the internal force [N] (collective).
 
         ``tension``: the internal force along +x on the free end, what the pull holds.
-        ``root_tension``: the axial force N the tape carries into the root attachment (tension positive), the internal force on the root edge
-        along the tape's direction there, (cos, 0, sin) of the hub angle. With frictionless
-        contact, N + M kappa - U is the same all along the tape (the configurational force
+        ``root_tension``: the axial force N the tape carries into the root attachment (tension
+        positive), the internal force on the root edge along the tape's direction there,
+        (cos, 0, sin) of the hub angle. With frictionless contact, N + M kappa - U is the same all along the tape (the configurational force
         balance of physics.md Sec. 5), so T - N is the coiling tension M kappa - U of the first
         turn: Eq. 2.6 for a flattened coil.
         """
