@@ -204,10 +204,10 @@ class CoilingModel:
 
         ``tension``: the internal force along +x on the free end, what the pull holds.
         ``root_tension``: the axial force N the tape carries into the root attachment (tension
-        positive), the internal force on the root edge along the tape's direction there,
-        (cos, 0, sin) of the hub angle. With frictionless contact, N + M kappa - U is the same all along the tape (the configurational force
-        balance of physics.md Sec. 5), so T - N is the coiling tension M kappa - U of the first
-        turn: Eq. 2.6 for a flattened coil.
+        positive), the internal force on the root edge along the tape's direction there, (cos,
+        0, sin) of the hub angle. With frictionless contact, N + M kappa - U is the same all
+        along the tape (the configurational force balance of physics.md Sec. 5), so T - N is the
+        coiling tension M kappa - U of the first turn: Eq. 2.6 for a flattened coil.
         """
         f = self.internal_force()
         angle = self.root.angle
