@@ -14,11 +14,12 @@ CASE ?= fold
 setup:
 	@$(ENV) setup
 
-# the main job: the theory report, then the benchmark coiling run on the coarse mesh (serial:
-# faster than two ranks at 3.6k dofs, and the render needs one rank)
+# the main job: the theory report, then the benchmark pipeline on the coarse mesh: coiling to
+# the stowed state, then deployment from it (serial, so that the renders can be made)
 demo: setup
 	$(RUN) python3 demos/theory_report.py
 	$(RUN) python3 demos/coiling.py $(MESH)
+	$(RUN) python3 demos/deployment.py $(MESH)
 
 test: setup
 	$(RUN) tools/run-tests serial

@@ -68,3 +68,41 @@ def test_coil_short_run_writes_results(tmp_path, capsys):
     assert summary["completed"] and summary["hub_angle"] == 0.3
     for name in ("config.toml", "history.csv", "summary.json", "coil.bp", "stowed/meta.json"):
         assert (out / name).exists(), name
+
+
+def test_deploy_refuses_a_missing_checkpoint(tmp_path, capsys):
+    assert main(["deploy", str(tmp_path / "nowhere"), "--out", str(tmp_path / "out")]) == 2
+    assert "is not a stowed checkpoint" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_run_pipeline_then_deploy_from_its_checkpoint(tmp_path, capsys):
+    """tapecoil run (coil, stow, deploy) on a short tape, then tapecoil deploy from its checkpoint."""
+    path = tmp_path / "short.toml"
+    path.write_text(
+        "[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.5\n[mesh]\npreset = 'coarse'\n"
+        "[deployment]\nt_end = 0.001\nrelease_time = 0.0005\n"
+    )
+    out = tmp_path / "run"
+    # stops at t_end before lambda = 1: exit status 1, but every result is written
+    assert main(["run", str(path), "--out", str(out), "--json"]) == 1
+    result = json.loads(capsys.readouterr().out)
+    assert result["coiling"]["completed"]
+    deployment = result["deployment"]
+    assert deployment["time"] == pytest.approx(0.001) and "t_end" in deployment["message"]
+    for name in (
+        "summary.json",
+        "stowed/meta.json",
+        "deployment_history.csv",
+        "deployment_summary.json",
+        "deployment.bp",
+        "deployed/meta.json",
+    ):
+        assert (out / name).exists(), name
+    # the deployment again, from the checkpoint (configuration read beside it)
+    assert main(["deploy", str(out / "stowed"), "--out", str(tmp_path / "again"), "--json"]) == 1
+    again = json.loads(capsys.readouterr().out)
+    assert again["lambda"] == pytest.approx(deployment["lambda"], abs=1e-6)
+    assert again["measures"]["energy"]["stowed"] == pytest.approx(
+        deployment["measures"]["energy"]["stowed"], rel=1e-6
+    )

@@ -5,6 +5,9 @@ preset; prints DOFs, load steps, Newton iterations per step, the largest converg
 mean time per Newton iteration (assembly and linear solve), with the machine and the MPI size.
 --case coil: the benchmark coiling run (flattening, then 36 rad) into results/bench-coil-*;
 prints DOFs, steps, Newton iterations, wall time and the validated measures.
+--case deploy: the deployment from the stowed state of --case coil on the same mesh and rank
+count (results/bench-coil-<mesh>-np<N>/stowed; run that first) to lambda = 1, into
+results/bench-deploy-*; the same figures.
 Run under mpirun for parallel figures: `make bench CASE=coil MESH=default NP=2`.
 """
 
@@ -24,29 +27,41 @@ parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
 parser.add_argument("--angle", type=float, default=1.0, help="final end rotation [rad]")
 parser.add_argument("--json", action="store_true")
-parser.add_argument("--case", default="fold", choices=("fold", "coil"))
+parser.add_argument("--case", default="fold", choices=("fold", "coil", "deploy"))
 args = parser.parse_args()
 machine = f"{platform.machine()}, {platform.processor() or 'cpu'}, {MPI.COMM_WORLD.size} rank(s)"
 
-if args.case == "coil":
+if args.case in ("coil", "deploy"):
     import dataclasses
+    from pathlib import Path
 
     from tapecoil.coiling import run_coiling
+    from tapecoil.deployment import run_deployment
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset=args.mesh))
-    out = f"results/bench-coil-{args.mesh}-np{MPI.COMM_WORLD.size}"
-    summary, _ = run_coiling(config, out, progress=False)
+    coil_dir = Path(f"results/bench-coil-{args.mesh}-np{MPI.COMM_WORLD.size}")
+    if args.case == "coil":
+        summary, _ = run_coiling(config, coil_dir, progress=False)
+        case = "coiling, flattening + 36 rad"
+    else:
+        if not (coil_dir / "stowed" / "meta.json").is_file():
+            raise SystemExit(
+                f"no stowed state in {coil_dir}: run `make bench CASE=coil` with the same MESH and NP"
+            )
+        out = f"results/bench-deploy-{args.mesh}-np{MPI.COMM_WORLD.size}"
+        summary, _ = run_deployment(config, out, stowed=coil_dir / "stowed", progress=False)
+        case = "deployment from the stowed state to lambda = 1"
     run = summary["run"]
     report = {
-        "case": "coiling, flattening + 36 rad",
+        "case": case,
         "mesh": f"{args.mesh} ({run['mesh']})",
         "machine": machine,
     }
     report.update({k: v for k, v in run.items() if k != "mesh"})
     report["completed"] = summary["completed"]
     for name, value in summary["measures"].items():
-        if isinstance(value, dict) and "error" in value:
+        if isinstance(value, dict) and value.get("error") is not None:
             report[f"{name} (error)"] = value["error"]
     if MPI.COMM_WORLD.rank == 0:
         for key, value in report.items():

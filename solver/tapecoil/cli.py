@@ -153,6 +153,71 @@ def cmd_coil(args: argparse.Namespace) -> int:
     return 0 if summary["completed"] else 1
 
 
+def _print_deployment(summary: dict, directory) -> None:
+    run = summary["run"]
+    state = "deployed" if summary["completed"] else f"STOPPED: {summary['message']}"
+    _echo(
+        f"deployment to lambda = {summary['lambda']:.3f} at t = {summary['time']:.4g} s: {state}\n"
+        f"  mesh {run['mesh']} ({run['dofs']} dofs) on {run['ranks']} rank(s): {run['steps']} steps, "
+        f"{run['newton_iterations']} Newton iterations, {run['wall_time']:.1f} s; results in {directory}"
+    )
+    m = summary["measures"]
+    for name, computed, reference, error in _entries(m):
+        if computed is not None:
+            _echo(f"  {name:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}")
+        else:
+            _echo(f"  {name:<26} not reached; reference {reference:.5g}")
+    e = m["energy"]
+    _echo(
+        f"  energy: stowed {e['stowed']:.4g} J, numerically dissipated at most "
+        f"{e['largest_dissipated_fraction']:.2%}, largest growth {e['largest_growth_fraction']:.2%}"
+    )
+
+
+def _stowed_config(args: argparse.Namespace):
+    """The configuration for a deployment: the file given, else the one beside the checkpoint."""
+    from pathlib import Path
+
+    stowed = Path(args.stowed)
+    if not (stowed / "meta.json").is_file() or not (stowed / "state.bp").exists():
+        raise ConfigError(f"{stowed} is not a stowed checkpoint (no meta.json and state.bp in it)")
+    beside = stowed.parent / "config.toml"
+    return load_config(args.config or (beside if beside.is_file() else None))
+
+
+def cmd_deploy(args: argparse.Namespace) -> int:
+    config = _stowed_config(args)
+    from .deployment import run_deployment
+
+    directory = args.out or f"{config.output.directory}/deploy"
+    summary, _ = run_deployment(config, directory, stowed=args.stowed, progress=not args.json)
+    if args.json:
+        _echo(json.dumps(summary, indent=2))
+    else:
+        _print_deployment(summary, directory)
+    return 0 if summary["completed"] else 1
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    config = _with_mesh(load_config(args.config), args.mesh)
+    from .coiling import run_coiling
+    from .deployment import run_deployment
+
+    directory = args.out or f"{config.output.directory}/run"
+    coil, model = run_coiling(config, directory, progress=not args.json)
+    out = {"coiling": coil}
+    if coil["completed"]:
+        out["deployment"], _ = run_deployment(config, directory, coiling=model, progress=not args.json)
+    if args.json:
+        _echo(json.dumps(out, indent=2))
+    else:
+        state = "stowed" if coil["completed"] else f"STOPPED: {coil['message']}"
+        _echo(f"coiling to {coil['hub_angle']:.4g} rad: {state} ({coil['run']['wall_time']:.1f} s)")
+        if "deployment" in out:
+            _print_deployment(out["deployment"], directory)
+    return 0 if coil["completed"] and out.get("deployment", {}).get("completed") else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tapecoil", description="Coiling and deployment of tape springs (FEniCSx)."
@@ -181,6 +246,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", help="checkpoint directory (a previous run's stowed/) to continue from")
     p.add_argument("--json", action="store_true", help="print the JSON summary")
     p.set_defaults(func=cmd_coil)
+
+    p = sub.add_parser("deploy", help="deploy from a stowed checkpoint (implicit dynamics)")
+    p.add_argument("stowed", help="stowed checkpoint directory (a coiling run's stowed/)")
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the one beside the checkpoint)")
+    p.add_argument("--out", help="results directory (default: <output.directory>/deploy)")
+    p.add_argument("--json", action="store_true", help="print the JSON summary")
+    p.set_defaults(func=cmd_deploy)
+
+    p = sub.add_parser("run", help="the whole pipeline: coil, stow, deploy")
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
+    p.add_argument("--mesh", choices=("coarse", "default", "fine"), help="mesh preset (overrides the file)")
+    p.add_argument("--out", help="results directory (default: <output.directory>/run)")
+    p.add_argument("--json", action="store_true", help="print the JSON summaries")
+    p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("config", help="print a configuration as TOML (the defaults if none is given)")
     p.add_argument("config", nargs="?", help="TOML configuration to check and print")

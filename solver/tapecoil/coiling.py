@@ -598,7 +598,7 @@ def coil_measures(model: CoilingModel) -> dict:
     return out
 
 
-def _progress(comm, total: float, label: str):
+def _progress(comm, total: float, label: str, unit: str = "rad"):
     """A tqdm bar on rank 0 (None elsewhere, or when tqdm is missing)."""
     if comm.rank != 0:
         return None
@@ -609,8 +609,8 @@ def _progress(comm, total: float, label: str):
     return tqdm(
         total=round(total, 3),
         desc=label,
-        unit="rad",
-        bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} {unit} [{elapsed}<{remaining}] {postfix}",
+        unit=unit,
+        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} {unit} [{elapsed}<{remaining}] {postfix}",
     )
 
 

@@ -226,19 +226,27 @@ class DeploymentConfig:
     Attributes:
         t_end: simulated time [s].
         dt: initial time step [s].
+        max_dt: largest time step [s] (steps grow from dt after easy steps).
+        release_time: time over which the hold on the free end (pull and guide) is released [s].
         rho_inf: high-frequency spectral radius of generalized-alpha [-]; 1 is trapezoidal Newmark.
         lambda_end: deployed fraction at which the run stops early [-].
     """
 
     t_end: float = param(0.6, "s", POSITIVE)
-    dt: float = param(1e-3, "s", POSITIVE)
-    rho_inf: float = param(0.9, "-", Range(0.0, 1.0))
+    dt: float = param(1e-4, "s", POSITIVE)
+    max_dt: float = param(1e-3, "s", POSITIVE)
+    release_time: float = param(2e-3, "s", NON_NEGATIVE)
+    rho_inf: float = param(0.5, "-", Range(0.0, 1.0))
     lambda_end: float = param(1.0, "-", Range(0.0, 1.0, True))
 
     def check(self) -> None:
         if self.dt >= self.t_end:
             raise ConfigError(
                 f"deployment.dt = {self.dt:g} s must be smaller than deployment.t_end = {self.t_end:g} s"
+            )
+        if self.max_dt < self.dt:
+            raise ConfigError(
+                f"deployment.max_dt = {self.max_dt:g} s must be at least deployment.dt = {self.dt:g} s"
             )
 
 

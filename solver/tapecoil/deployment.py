@@ -1,0 +1,618 @@
+"""Dynamic deployment of the stowed tape: implicit generalized-alpha from the coiled state.
+
+At release (physics.md Sec. 6, thesis Table 3.2) the pull and the guide at the free end are
+removed, the hub is held at its final angle and the root stays attached to it; hub and
+coil-on-coil contact are kept. The stored strain energy drives the free part round the hub,
+peeling the tape off the coil (Seffen and Pellegrino's picture: a straight part tangent to the
+coil, which shrinks).
+
+Inertia is the shell's consistent one. With the director d(theta), the kinetic energy per unit
+reference area is rho h |u'|^2 / 2 + rho h^3 / 24 |d'|^2; its Euler-Lagrange term in the
+direction (du, dtheta) is rho h u''.du + rho h^3/12 d''.(Dd dtheta), with
+d'' = Dd theta'' + D^2d[theta', theta'] (the centripetal part of the rotary inertia). Both are
+written with UFL's automatic differentiation of d(theta). Time stepping is generalized-alpha
+(:mod:`tapecoil.dynamics`) with adaptive steps and the cut-back logic of the load stepping
+(:class:`tapecoil.continuation.Continuation`).
+
+The deployed fraction lambda is measured from the geometry (see :meth:`DeploymentModel.lift_off`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from . import theory
+from .coiling import CoilingModel
+from .config import Config
+from .continuation import Continuation, ContinuationError, StepRecord
+from .dynamics import GeneralizedAlpha
+from .geometry import FREE_END
+from .shell import director_from_angles
+from .solvers import PointForce, SNESSolver
+from .verification import _global_scalar
+
+
+def director_rates(model, theta, theta_dot, theta_ddot=None):
+    """Dd(theta) (3 x 2), d' = Dd theta' and, with theta'', d'' = Dd theta'' + D^2d[theta', theta']."""
+    t = ufl.variable(theta)
+    d = director_from_angles(model.theta_ref + t, model.frame)
+    Dd = ufl.diff(d, t)
+    d_dot = ufl.dot(Dd, theta_dot)
+    if theta_ddot is None:
+        return Dd, d_dot, None
+    D2d = ufl.diff(Dd, t)
+    i, j, k = ufl.indices(3)
+    centripetal = ufl.as_vector(D2d[i, j, k] * theta_dot[j] * theta_dot[k], i)
+    return Dd, d_dot, ufl.dot(Dd, theta_ddot) + centripetal
+
+
+@dataclass
+class _Magnitude:
+    """A mutable ``value`` (an array here) for :class:`PointForce`."""
+
+    value: np.ndarray
+
+
+def _parts(expr):
+    """(u, theta) parts of a state-shaped expression of the mixed space (3 + 2 components)."""
+    return ufl.as_vector([expr[i] for i in range(3)]), ufl.as_vector([expr[3], expr[4]])
+
+
+class DeploymentModel:
+    """The released tape: root held at the stowed hub angle, contact kept, inertia added.
+
+    ``coiling`` is a :class:`CoilingModel` in the stowed state (from a run or a checkpoint); its
+    shell, contact and root attachment are reused. ``rho_inf`` overrides the configured
+    spectral radius.
+    """
+
+    # lift-off: a centre-line point whose inner face is more than this many thicknesses off its
+    # obstacle (the turn beneath or the hub) has left the coil (see lift_off)
+    lift_off_gap = 2.0
+
+    def __init__(self, coiling: CoilingModel, rho_inf: float | None = None):
+        self.coiling = c = coiling
+        self.config = cfg = c.config
+        self.comm = c.comm
+        self.model = model = c.model
+        self.contact = c.contact
+        self.hub_angle = c.root.angle
+        c.root.set(1.0, self.hub_angle)
+        self.bcs = c.root.bcs
+        tp = cfg.tape
+        self.rho_inf = cfg.deployment.rho_inf if rho_inf is None else rho_inf
+        self.integrator = ti = GeneralizedAlpha(model.q, self.rho_inf)
+
+        rho, h = tp.density, tp.h
+        self.translational = rho * h  # kg/m^2
+        self.rotary = rho * h**3 / 12  # kg
+        dA = model.jacobian
+        du, dtheta = _parts(model.dq)
+
+        # the equation of motion at the generalized-alpha levels
+        a_u, a_theta = _parts(ti.a_m)
+        v_u, v_theta = _parts(ti.v_f)
+        _, theta_f = _parts(ti.q_f)
+        Dd_f, _, d_ddot = director_rates(model, theta_f, v_theta, a_theta)
+        inertia = (
+            (self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(d_ddot, ufl.dot(Dd_f, dtheta)))
+            * dA
+            * model.dx
+        )
+        self.energy = model.strain_energy + c.contact.energy
+        internal = ufl.derivative(self.energy, model.q, model.dq)
+
+        # the hold on the free end (the guide and the pull of the coiling run), released over
+        # release_time: a stiff spring to the stowed end plus the dead forces that held it there,
+        # both scaled by hold_factor, which falls from 1 to 0 (see hold_at)
+        self.release_time = cfg.deployment.release_time
+        self.hold_factor = dolfinx.fem.Constant(model.mesh, 1.0)
+        self.stowed = dolfinx.fem.Function(model.W, name="stowed_state")
+        self.stowed.x.array[:] = model.q.x.array
+        u0, theta0 = _parts(self.stowed)
+        u, theta = _parts(model.q)
+        ell = c.element_length
+        k_hold = tp.E * tp.h / ell  # per unit edge length: an element's membrane stiffness
+        spring = k_hold * (ufl.dot(u - u0, du) + ell**2 * ufl.dot(theta - theta0, dtheta))
+        spring = spring * model.ds(FREE_END)
+        self._spring_form = dolfinx.fem.form(spring)
+        F = inertia + ti.force_average(internal) + ti.at_midpoint(self.hold_factor * spring)
+        J = ufl.derivative(F, model.q, ufl.TrialFunction(model.W))
+        self.solver = SNESSolver.from_config(F, J, model.q, self.bcs, cfg.solver)
+
+        # kinetic energy of the current state (velocity: the integrator's latest)
+        v_u, v_theta = _parts(ti.v_old)
+        _, d_dot, _ = director_rates(model, model.theta, v_theta)
+        kinetic = 0.5 * (self.translational * ufl.dot(v_u, v_u) + self.rotary * ufl.dot(d_dot, d_dot))
+        self.kinetic_form = dolfinx.fem.form(kinetic * dA * model.dx)
+        self._internal_form = internal
+        self._end_dofs = self._owned_edge_dofs(FREE_END)
+        self._dead = _Magnitude(np.zeros(len(self._end_dofs)))
+        self.solver.point_forces.append(PointForce(self._end_dofs, self._dead))
+        self._dead_full = self._end_internal_force()
+        self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
+
+    def _owned_edge_dofs(self, tag: int) -> np.ndarray:
+        """Owned W-dofs (local indices) of every state component on the edge ``tag``."""
+        facets = self.coiling.strip.facet_tags.find(tag)
+        W = self.model.W
+        dofs = []
+        for i, n in ((0, 3), (1, 2)):
+            for j in range(n):
+                sub = W.sub(i).sub(j)
+                V, _ = sub.collapse()
+                dofs.append(dolfinx.fem.locate_dofs_topological((sub, V), 1, facets)[0])
+        dofs = np.unique(np.concatenate(dofs))
+        return dofs[dofs < W.dofmap.index_map.size_local * W.dofmap.index_map_bs]
+
+    def _end_internal_force(self) -> np.ndarray:
+        """f_int(q) on the free end's owned dofs: in the stowed state, what the pull and guide held."""
+        internal = dolfinx.fem.Function(self.model.W)
+        dolfinx.fem.assemble_vector(internal.x.array, dolfinx.fem.form(self._internal_form))
+        internal.x.scatter_reverse(dolfinx.la.InsertMode.add)
+        return internal.x.array[self._end_dofs].copy()
+
+    def hold_at(self, t: float) -> float:
+        """The factor of the hold at time t: 1 at release, 0 after ``release_time`` (C1 smoothstep).
+
+        An instantaneous release would hit the end's tiny mass with the guide's reactions
+        (accelerations of 10^7 m/s^2 on the coarse mesh) and start a shock; dead forces alone,
+        without the spring, leave the end's rotations unstable. The thesis's explicit run
+        released with smooth-step amplitudes too.
+        """
+        s = min(max(t / self.release_time, 0.0), 1.0) if self.release_time > 0 else 1.0
+        return 1.0 - s * s * (3.0 - 2.0 * s)
+
+    def release(self, t: float) -> None:
+        """Set the hold (spring and dead forces) of time t."""
+        factor = self.hold_at(t)
+        self.hold_factor.value = factor
+        self._dead.value = factor * self._dead_full
+
+    def hold_force(self, t: float) -> np.ndarray:
+        """The hold's force on the tape at time t and the current state (local dof array)."""
+        f = dolfinx.fem.Function(self.model.W)
+        dolfinx.fem.assemble_vector(f.x.array, self._spring_form)
+        f.x.scatter_reverse(dolfinx.la.InsertMode.add)
+        out = -self.hold_at(t) * f.x.array
+        out[self._end_dofs] += self.hold_at(t) * self._dead_full
+        return out
+
+    def work(self, force_before: np.ndarray, force_after: np.ndarray, dq: np.ndarray) -> float:
+        """Work of a force over a step, trapezoidal, on owned dofs [J] (collective)."""
+        W = self.model.W
+        n = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
+        local = 0.5 * float(np.dot((force_before + force_after)[:n], dq[:n]))
+        return self.comm.allreduce(local, op=MPI.SUM)
+
+    # -- start ----------------------------------------------------------------------------------
+    def initial_acceleration(self) -> None:
+        """Translational a_0 from M a_0 = f_hold - f_int(q_0), at rest.
+
+        At t = 0 the hold still balances the internal forces, so a_0 is the solver's residual
+        noise; it is computed rather than assumed. The mass matrix at rest (no centripetal term)
+        is solved with a direct solver; the attached root has zero acceleration.
+        """
+        model, ti = self.model, self.integrator
+        trial, test = ufl.TrialFunction(model.W), model.dq
+        a_u, a_theta = _parts(trial)
+        du, dtheta = _parts(test)
+        Dd, _, _ = director_rates(model, model.theta, ufl.as_vector([0.0, 0.0]))
+        mass = (
+            (
+                self.translational * ufl.dot(a_u, du)
+                + self.rotary * ufl.dot(ufl.dot(Dd, a_theta), ufl.dot(Dd, dtheta))
+            )
+            * model.jacobian
+            * model.dx
+        )
+        M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(mass), bcs=self.bcs)
+        M.assemble()
+        b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(-self._internal_form))
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b.array[self._end_dofs] += self._dead_full
+        fixed = np.concatenate([bc.dof_indices()[0] for bc in self.bcs])
+        owned = b.getLocalSize()
+        b.array[fixed[fixed < owned]] = 0.0
+        ksp = PETSc.KSP().create(self.comm)
+        ksp.setOperators(M)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        x = b.duplicate()
+        ksp.solve(b, x)
+        ti.a_old.x.array[: x.getLocalSize()] = x.array
+        ti.a_old.x.scatter_forward()
+        # the rotary part starts from zero: releasing the guide's end moment on the tiny rotary
+        # inertia (rho h^3/12) is a transient of nanoseconds, which the predictor would
+        # extrapolate into radians; the mass matrix has no u-theta coupling at rest, so the
+        # translational part is the consistent one regardless
+        ti.a_old.x.array[self.coiling.contact.nodes.theta_dofs.ravel()] = 0.0
+        ti.v_old.x.array[:] = 0.0
+        ti.restart()
+        for obj in (ksp, M, b, x):
+            obj.destroy()
+
+    # -- measures -------------------------------------------------------------------------------
+    def energies(self) -> dict[str, float]:
+        out = self.coiling.energies()
+        out["kinetic"] = _global_scalar(self.model, self.kinetic_form)
+        return out
+
+    def tip(self) -> np.ndarray:
+        """Mean position of the free end [m] (3,)."""
+        return np.array([_global_scalar(self.model, f) for f in self._tip_forms])
+
+    def lift_off(self) -> dict[str, float]:
+        """The coiled length and the deployed fraction lambda (collective).
+
+        The lift-off point is the last point of the centre line, counted from the root, whose
+        inner face lies within ``lift_off_gap`` h of its obstacle (the turn beneath or the
+        hub). The last such point, not the first beyond it: after release the turns inside the
+        coil rattle and open by a few h here and there, and the tape bridges the climbs over the
+        root step; neither is unspooling. The coiled length is the
+        material coordinate where the gap crosses that value, less the distance
+        sqrt((r + G)^2 - r^2) over which a straight tape leaving the coil tangentially stays
+        within G of it (r the obstacle radius there, G the gap), so that
+
+            lambda = 1 - coiled length / L
+
+        is 1 when the tape has unwound down to the root.
+        """
+        c, tp = self.contact, self.config.tape
+        G = self.lift_off_gap * tp.h
+        nodes = c.nodes
+        n_owned = nodes.space.dofmap.index_map.size_local
+        q = self.model.q.x.array
+        face = nodes.positions(q) - 0.5 * tp.h * nodes.directors(q)
+        obstacle = c.obstacle_radius(c.psi.x.array)
+        gap = c.polar(face)[0] - obstacle
+        xi = nodes.xi[:, :n_owned]
+        distance = np.abs(xi[1])
+        local_min = distance.min() if distance.size else np.inf
+        centre = distance <= self.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * tp.b
+        columns = (xi[0], gap[:n_owned], obstacle[:n_owned])
+        rows = np.vstack(self.comm.allgather(np.column_stack([col[centre] for col in columns])))
+        s, g, r = rows[np.argsort(rows[:, 0])].T
+        on = np.nonzero(g <= G)[0]
+        if len(on) == 0:
+            coiled = 0.0
+        elif on[-1] == len(s) - 1:
+            coiled = float(s[-1])
+        else:
+            i = on[-1]
+            w = (G - g[i]) / (g[i + 1] - g[i])
+            tangent = math.sqrt((r[i] + G) ** 2 - r[i] ** 2)
+            coiled = max(float(s[i] + w * (s[i + 1] - s[i])) - tangent, 0.0)
+        return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+
+    def update(self) -> None:
+        """After a converged step: winding angles from the new state (the hub stays put)."""
+        self.contact.update(self.hub_angle)
+
+
+@dataclass
+class DeploymentResult:
+    history: list[dict] = field(default_factory=list)
+    completed: bool = False
+    message: str = ""
+
+
+class _Deployed(Exception):
+    """Raised from the step callback to end the time loop once lambda reaches lambda_end."""
+
+
+class DeploymentRun:
+    """Time stepping from release to ``deployment.lambda_end`` (or ``deployment.t_end``).
+
+    Steps start at ``deployment.dt`` and grow by ``solver.grow`` after easy steps up to
+    ``max_dt``; a step that fails is cut back (``solver.cutback``, ``solver.max_cutbacks``),
+    as in the load stepping. ``on_step(row)`` is called on every rank after each step.
+    """
+
+    # the step grows after steps of at most this many Newton iterations: on the first 20 ms of
+    # the coarse benchmark 56 steps against 83 with 5
+    easy_iterations = 8
+
+    def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None):
+        self.m = model
+        self.on_step = on_step
+        d = model.config.deployment
+        self.max_dt = max_dt if max_dt is not None else d.max_dt
+        self.result = DeploymentResult()
+        self.stowed_energy = None
+        self.external_work = 0.0
+        self._t0 = time.perf_counter()
+
+    def _row(self, t: float, step: StepRecord | None) -> dict:
+        m = self.m
+        e = m.energies()
+        potential = e["strain"] + e["contact"]
+        if self.stowed_energy is None:
+            self.stowed_energy = potential
+        lift = m.lift_off()
+        tip = m.tip()
+        row = {
+            "time": t,
+            "step": step.step if step else 0.0,
+            "newton_iterations": step.iterations if step else 0,
+            "cutbacks": step.cutbacks if step else 0,
+            "lambda": lift["lambda"],
+            "coiled_length": lift["coiled_length"],
+            "kinetic_energy": e["kinetic"],
+            "strain_energy": e["strain"],
+            "membrane_energy": e["membrane"],
+            "bending_energy": e["bending"],
+            "shear_energy": e["shear"],
+            "contact_energy": e["contact"],
+            # the work of the releasing hold on the free end
+            "external_work": self.external_work,
+            # the energy the time integration has removed (numerical dissipation: the model has
+            # no physical damping)
+            "dissipated_energy": self.stowed_energy + self.external_work - potential - e["kinetic"],
+            "tip_x": tip[0],
+            "tip_y": tip[1],
+            "tip_z": tip[2],
+            "max_penetration": m.coiling.max_penetration(),
+            "wall_time": time.perf_counter() - self._t0,
+        }
+        self.result.history.append(row)
+        if self.on_step is not None:
+            self.on_step(row)
+        return row
+
+    def run(self) -> DeploymentResult:
+        m = self.m
+        cfg = m.config
+        d = cfg.deployment
+        ti = m.integrator
+        m.initial_acceleration()
+        self._row(0.0, None)
+
+        def control(max_dt, span):
+            """Step limits [s] as the fractions of the phase's span the continuation works in."""
+            return dataclasses.replace(
+                cfg.solver,
+                initial_step=min(d.dt / span, 1.0),
+                max_step=min(max_dt / span, 1.0),
+                min_step=min(cfg.solver.min_step, 1e-3 * d.dt / span),
+            )
+
+        clock = {"t": 0.0}
+        alpha_f = ti.parameters.alpha_f
+
+        def set_time(target):
+            dt = target - clock["t"]
+            ti.set_step(dt)
+            m.release(target - alpha_f * dt)  # the hold at the level of the internal forces
+
+        def predict(t_from, t_to):
+            ti.predict(t_to - t_from)
+
+        hold = {"force": m.hold_force(0.0)}
+
+        def converged(step):
+            dq = m.model.q.x.array - ti.q_old.x.array
+            force = m.hold_force(step.load)
+            self.external_work += m.work(hold["force"], force, dq)
+            hold["force"] = force
+            ti.advance()
+            clock["t"] = step.load
+            m.update()
+            row = self._row(step.load, step)
+            if row["lambda"] >= d.lambda_end:
+                raise _Deployed
+
+        # the release in steps of at most a twentieth of it: the hold's spring is stiff and
+        # its work is integrated over the steps; then the steps grow to max_dt
+        release = min(m.release_time, d.t_end)
+        phases = [(release, min(release / 20, d.dt))] if release > 0 else []
+        phases.append((d.t_end, max(self.max_dt, d.dt)))
+        try:
+            for end, max_dt in phases:
+                if end <= clock["t"]:
+                    continue
+                cont = Continuation(
+                    m.solver.solve,
+                    set_time,
+                    m.model.q,
+                    control(max_dt, end - clock["t"]),
+                    predict=predict,
+                    easy_iterations=self.easy_iterations,
+                )
+                cont.on_step = converged
+                cont.run(clock["t"], end)
+            self.result.message = f"t_end = {d.t_end:g} s reached before lambda = {d.lambda_end:g}"
+        except _Deployed:
+            self.result.completed = True
+        except ContinuationError as err:
+            # the state is the last converged one (the continuation restored it)
+            self.result.message = str(err)
+        return self.result
+
+
+def _crossing_time(history: list[dict], lam: float) -> float | None:
+    """First time at which lambda reaches ``lam`` (linear between rows), None if never."""
+    for before, after in itertools.pairwise(history):
+        if before["lambda"] < lam <= after["lambda"]:
+            w = (lam - before["lambda"]) / (after["lambda"] - before["lambda"])
+            return before["time"] + w * (after["time"] - before["time"])
+    return None
+
+
+def deployment_reference(config, lam0: float, energy: str = "mu") -> theory.DeploymentSolution:
+    """The modified ODE of physics.md Sec. 6 from lambda0: Eq. 2.24 with r(lambda) of Eq. 4.4.
+
+    ``energy`` is the strain energy per unit area released by unspooling: "mu" is Seffen's
+    D (1 + nu) / R^2 (physics.md; exact for a coil of radius R), "plate" the plate estimate
+    w(r) of physics.md Sec. 3 at the coil radius r(lambda), which the benchmark coil (r about
+    13 mm < R = 15.1 mm) actually stores: 79 to 82 J/m^2 against mu = 67.9 J/m^2.
+    """
+    tp, r_hub = config.tape, config.hub.radius
+    if energy not in ("mu", "plate"):
+        raise ValueError(f"energy must be 'mu' or 'plate', got {energy!r}")
+
+    def rate(lam):
+        r = float(theory.coil_radius_during_deployment(lam, r_hub, tp.h, tp.L))
+        density = tp.mu if energy == "mu" else float(theory.energy_density(r, tp.R, tp.D, tp.nu))
+        return theory.seffen_rate(density, r, tp.R, tp.alpha, tp.rho_l, tp.L)
+
+    return theory.solve_deployment_ode(rate, lam0)
+
+
+def deployment_measures(config, history: list[dict]) -> dict:
+    """Deployment against the theory: times to lambda = 0.9 and to the end, energy balance."""
+    lam0 = history[0]["lambda"]
+    ode = deployment_reference(config, lam0)
+    tp, r_hub = config.tape, config.hub.radius
+    k_hub = theory.seffen_rate(tp.mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
+    stowed = history[0]["strain_energy"] + history[0]["contact_energy"]
+    dissipated = np.array([r["dissipated_energy"] for r in history])
+
+    def entry(computed, reference, **extra):
+        if computed is None:
+            return {"computed": None, "reference": float(reference), "error": None, **extra}
+        error = abs(computed - reference) / abs(reference)
+        return {"computed": float(computed), "reference": float(reference), "error": float(error), **extra}
+
+    t90 = _crossing_time(history, 0.9)
+    lam_end = config.deployment.lambda_end
+    t_end = _crossing_time(history, lam_end)
+    plate = deployment_reference(config, lam0, energy="plate")
+    released = history[0]["strain_energy"] - min(r["strain_energy"] for r in history)
+    unspooled = (max(r["lambda"] for r in history) - lam0) * tp.L
+    return {
+        "lambda0": lam0,
+        "time_to_0.9": entry(
+            t90, ode.t90, source="modified ODE (Eq. 2.24 with r(lambda), Eq. 4.4) from lambda0"
+        ),
+        "time_to_0.9_plate_energy": entry(
+            t90, plate.t90, source="the same ODE releasing the plate energy w(r) instead of mu"
+        ),
+        "released_energy_per_area": {
+            "computed": released / (unspooled * tp.b) if unspooled > 0 else None,
+            "mu": tp.mu,
+            "plate_at_coil_radius": float(theory.energy_density(config.hub.radius, tp.R, tp.D, tp.nu)),
+        },
+        "time_to_end": entry(
+            t_end, ode.time_to(lam_end), lam=lam_end, source="modified ODE from lambda0 (end effects)"
+        ),
+        "time_to_0.9_eq_2_20": {
+            "reference": theory.deployment_time(k_hub, 0.9),
+            "source": "Eq. 2.20, r = r_hub, lambda0 = 0",
+        },
+        "energy": {
+            "stowed": stowed,
+            "largest_dissipated_fraction": float(np.max(np.abs(dissipated)) / stowed),
+            "final_dissipated_fraction": float(dissipated[-1] / stowed),
+            "largest_growth_fraction": float(max(-dissipated.min(), 0.0) / stowed),
+            "final_kinetic_fraction": history[-1]["kinetic_energy"] / stowed,
+        },
+    }
+
+
+def run_deployment(
+    config: Config,
+    directory: str | Path,
+    comm=MPI.COMM_WORLD,
+    stowed: str | Path | None = None,
+    coiling: CoilingModel | None = None,
+    progress: bool = True,
+) -> tuple[dict, DeploymentModel]:
+    """Deploy from the stowed state and write the results into ``directory``.
+
+    The stowed state is the checkpoint directory ``stowed`` or the in-memory ``coiling`` model.
+    ``directory`` receives deployment_history.csv (a row per step), deployment.bp (VTX every
+    ``output.vtx_every`` steps and the last state), deployed/ (the last converged state, as a
+    checkpoint) and deployment_summary.json.
+    """
+    from .coiling import _progress, read_checkpoint, write_checkpoint
+    from .output import ShellWriter, write_csv
+
+    directory = Path(directory)
+    if comm.rank == 0:
+        directory.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    t_start = time.perf_counter()
+    if coiling is None:
+        if stowed is None:
+            raise ValueError("deployment needs a stowed checkpoint directory or a coiling model")
+        coiling, _ = read_checkpoint(stowed, config, comm)
+    model = DeploymentModel(coiling)
+    d = config.deployment
+    bar = _progress(comm, d.t_end, "deploying", unit="s") if progress else None
+    writer = ShellWriter(model.model, directory / "deployment.bp")
+    count = [0]
+
+    def on_step(row):
+        count[0] += 1
+        if count[0] % config.output.vtx_every == 0:
+            writer.write(row["time"])
+        if bar is not None:
+            bar.n = round(row["time"], 4)
+            bar.set_postfix_str(
+                f"lambda {row['lambda']:.3f} dt {row['step']:.2e} its {row['newton_iterations']}"
+            )
+
+    run = DeploymentRun(model, on_step=on_step)
+    try:
+        run.run()
+    finally:
+        if bar is not None:
+            bar.close()
+    history = run.result.history
+    writer.write(history[-1]["time"])
+    writer.close()
+    write_csv(directory / "deployment_history.csv", history, comm)
+    res = coiling.strip.resolution
+    meta = {
+        "hub_angle": model.hub_angle,
+        "tension": 0.0,
+        "time": history[-1]["time"],
+        "lambda": history[-1]["lambda"],
+        "completed": run.result.completed,
+        "resolution": {"across": res.across, "along": res.along, "grading": res.grading},
+    }
+    if config.output.checkpoint:
+        write_checkpoint(coiling, directory / "deployed", meta)
+    timing = model.solver.timing_per_iteration()
+    steps = history[1:]
+    summary = {
+        "completed": run.result.completed,
+        "message": run.result.message,
+        "time": history[-1]["time"],
+        "lambda": history[-1]["lambda"],
+        "rho_inf": model.rho_inf,
+        "measures": deployment_measures(config, history),
+        "run": {
+            "ranks": comm.size,
+            "dofs": model.model.W.dofmap.index_map.size_global * model.model.W.dofmap.index_map_bs,
+            "mesh": f"{res.along} x {res.across}",
+            "steps": len(steps),
+            "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
+            "newton_iterations_total": int(model.solver.timings["iterations"]),
+            "cutbacks": int(sum(r["cutbacks"] for r in steps)),
+            "smallest_step": min((r["step"] for r in steps), default=0.0),
+            "largest_step": max((r["step"] for r in steps), default=0.0),
+            "max_penetration": max(r["max_penetration"] for r in history),
+            "wall_time": time.perf_counter() - t_start,
+            "assembly_per_iteration": timing["assembly"],
+            "linear_solve_per_iteration": timing["linear_solve"],
+        },
+    }
+    if comm.rank == 0:
+        (directory / "deployment_summary.json").write_text(json.dumps(summary, indent=2))
+    return summary, model

