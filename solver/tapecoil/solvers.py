@@ -186,9 +186,13 @@ class SNESSolver:
         return {"assembly": assembly / its, "linear_solve": (self.timings["solve"] - assembly) / its}
 
     @classmethod
-    def from_config(cls, F, J, q, bcs, solver_config, **overrides):
-        """A solver with the tolerances and PETSc options of a :class:`SolverConfig`."""
-        options = {**solver_config.petsc_options, **overrides}
+    def from_config(cls, F, J, q, bcs, solver_config, defaults=None, **overrides):
+        """A solver with the tolerances and PETSc options of a :class:`SolverConfig`.
+
+        ``defaults``: PETSc options of the caller that the configuration may override;
+        ``overrides`` win over both.
+        """
+        options = {**(defaults or {}), **solver_config.petsc_options, **overrides}
         return cls(
             F,
             J,
