@@ -147,26 +147,13 @@ if rank0:
 
 # %%
 if comm.size == 1:
-    import pyvista
+    from tapecoil.render import render_on_hub
 
-    from tapecoil.render import render_shell
-
-    hub = pyvista.Cylinder(
-        center=model.axis_point,
-        direction=(0, 1, 0),
-        radius=config.hub.radius,
-        height=0.2 * config.tape.b,  # a short hub, so that the coil shows
-        resolution=120,
-    )
-    kx, _ = model.model.curvatures()
-    path = render_shell(
+    path = render_on_hub(
         model.model,
+        model.axis_point,
+        config,
         out / "stowed.png",
-        scalar=-kx * config.tape.R,
-        name="kappa_long R",
-        title=f"stowed: hub angle {summary['hub_angle']:.1f} rad",
-        camera=((0.4, -1.0, 0.3),),
-        clim=(0.0, 1.5),
-        extra=[(hub, {"color": "tan", "opacity": 1.0})],
+        f"stowed: hub angle {summary['hub_angle']:.1f} rad",
     )
     print("wrote", path)

@@ -119,26 +119,13 @@ if rank0:
 
 # %%
 if comm.size == 1:
-    import pyvista
+    from tapecoil.render import render_on_hub
 
-    from tapecoil.render import render_shell
-
-    hub = pyvista.Cylinder(
-        center=model.coiling.axis_point,
-        direction=(0, 1, 0),
-        radius=config.hub.radius,
-        height=0.2 * config.tape.b,
-        resolution=120,
-    )
-    kx, _ = model.model.curvatures()
-    path = render_shell(
+    path = render_on_hub(
         model.model,
+        model.coiling.axis_point,
+        config,
         out / "deployed.png",
-        scalar=-kx * config.tape.R,
-        name="kappa_long R",
-        title=f"deployment: t = {summary['time']:.3f} s, lambda = {summary['lambda']:.2f}",
-        camera=((0.4, -1.0, 0.3),),
-        clim=(0.0, 1.5),
-        extra=[(hub, {"color": "tan", "opacity": 1.0})],
+        f"deployment: t = {summary['time']:.3f} s, lambda = {summary['lambda']:.2f}",
     )
     print("wrote", path)

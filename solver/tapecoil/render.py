@@ -84,3 +84,27 @@ def render_shell(
     plotter.screenshot(str(path))
     plotter.close()
     return path
+
+
+def render_on_hub(model: NaghdiShell, axis_point, config, path: str | Path, title: str) -> Path:
+    """The tape with a short stretch of its hub, coloured by longitudinal curvature x R."""
+    import pyvista
+
+    hub = pyvista.Cylinder(
+        center=axis_point,
+        direction=(0, 1, 0),
+        radius=config.hub.radius,
+        height=0.2 * config.tape.b,  # a short hub, so that the coil shows
+        resolution=120,
+    )
+    kx, _ = model.curvatures()
+    return render_shell(
+        model,
+        path,
+        scalar=-kx * config.tape.R,
+        name="kappa_long R",
+        title=title,
+        camera=((0.4, -1.0, 0.3),),
+        clim=(0.0, 1.5),
+        extra=[(hub, {"color": "tan", "opacity": 1.0})],
+    )
