@@ -156,12 +156,15 @@ def test_bad_coiling_config_is_rejected_before_computing():
 
 
 @pytest.mark.mpi
-def test_two_ranks_coil_as_one():
+@pytest.mark.parametrize("predictor", ["secant", "shift"])
+def test_two_ranks_coil_as_one(predictor):
     """The same short coiling run distributed over the ranks and on each rank alone."""
     from tapecoil.coiling import CoilingModel, CoilingRun
 
     def coil(comm):
-        model = CoilingModel(short_tape(hub_angle=0.5), comm)
+        cfg = short_tape(hub_angle=0.5)
+        cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, predictor=predictor))
+        model = CoilingModel(cfg, comm)
         run = CoilingRun(model)
         run.flatten()
         run.coil(0.5)
@@ -202,3 +205,62 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
     assert float(first["hub_angle"]) > 0.5
     for key in ("strain_energy", "coiled_length", "end_slide"):
         assert float(last["resumed"][key]) == pytest.approx(float(last["direct"][key]), rel=1e-5), key
+
+
+def test_along_tape_shift_reproduces_nodes_and_smooth_fields():
+    """A whole element's shift returns the nodal values; a smooth field moves to spline accuracy."""
+    from tapecoil.coiling import AlongTape, CoilingModel
+
+    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    nodes = model.contact.nodes
+    along = AlongTape(nodes, MPI.COMM_SELF)
+    assert len(along.lines) == 2 * model.strip.resolution.across + 1
+    q = np.zeros_like(model.model.q.x.array)
+    L, l = model.config.tape.L, model.element_length
+    x, s = nodes.xi
+    field = np.column_stack([np.sin(2 * math.pi * x / L) * (1 + s), x**2, s * x, np.cos(x / L), x])
+    q[nodes.u_dofs], q[nodes.theta_dofs] = field[:, :3], field[:, 3:]
+    inside = (x >= l) & (x <= L - l)
+    whole = along.values_at(q, -l)
+    source = np.isclose(x[:, None] - l, x[None, :], atol=1e-12) & np.isclose(
+        s[:, None], s[None, :], atol=1e-12
+    )
+    assert np.allclose(whole[inside], field[source.argmax(axis=1)][inside], atol=1e-13)
+    part = along.values_at(q, 0.3 * l)
+    moved = x + 0.3 * l
+    expected = np.column_stack(
+        [np.sin(2 * math.pi * moved / L) * (1 + s), moved**2, s * moved, np.cos(moved / L), moved]
+    )
+    # a cubic spline through nodes dx = l/2 apart errs by at most (5/384) dx^4 max|f''''| away
+    # from the ends; components of degree <= 2 in xi_1 come out exact
+    interior = (x >= l) & (x <= L - 2 * l)
+    bound = 5 / 384 * (l / 2) ** 4 * (2 * math.pi / L) ** 4 * (1 + np.abs(s).max())
+    assert np.abs(part[interior, 0] - expected[interior, 0]).max() < bound
+    assert np.allclose(part[interior][:, [1, 2, 4]], expected[interior][:, [1, 2, 4]], rtol=0, atol=1e-14)
+
+
+def test_predictor_choice_follows_the_element_length():
+    from tapecoil.coiling import choose_predictor
+
+    r_hub = 0.0127
+    assert choose_predictor("auto", 0.004, r_hub) == "shift"  # default mesh
+    assert choose_predictor("auto", 0.0125, r_hub) == "secant"  # coarse mesh
+    assert choose_predictor("secant", 0.004, r_hub) == "secant"
+
+
+def test_shift_and_secant_predictors_reach_the_same_state():
+    """The predictor changes the path of Newton, not the equilibrium (a short tape, 1.5 rad)."""
+    from tapecoil.coiling import CoilingModel, CoilingRun
+
+    states = {}
+    for predictor in ("shift", "secant"):
+        cfg = short_tape(hub_angle=1.5)
+        cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, predictor=predictor))
+        model = CoilingModel(cfg, MPI.COMM_SELF)
+        assert model.predictor == predictor
+        run = CoilingRun(model)
+        run.flatten()
+        run.coil(1.5)
+        states[predictor] = run.result.history[-1]
+    for key in ("strain_energy", "coiled_length", "end_slide", "outer_radius"):
+        assert states["shift"][key] == pytest.approx(states["secant"][key], rel=1e-6), key

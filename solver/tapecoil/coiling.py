@@ -12,9 +12,11 @@ The procedure mirrors the physical one (issue 4):
    line tangent to the hub's top (z = 0: displacement across and normal to the line and the end's
    rotations held), pulled by T along +x.
 
-Each step starts from a predictor: material already on the coil turns rigidly with the hub, the
-free part slides along the guide line by the length wound on, and material in between is
-blended. Newton then only corrects the ploy region.
+Each step starts from a predictor: material already on the coil turns rigidly with the hub; the
+rest (ploy region and free part) takes the state of the material that was a wound length
+ds = r dtheta further back along the tape (the "shift": steady coiling looks the same in the lab
+frame from step to step), or, on meshes too coarse to interpolate along the tape, the secant
+extrapolation of the last two converged states. See :meth:`CoilingModel.predict`.
 
 All quantities are SI. Sign conventions: the hub angle is positive in the coiling sense (the root
 moves from the top of the hub towards -x, i.e. a rotation about -y); the longitudinal curvature
@@ -30,11 +32,13 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import dolfinx
 import numpy as np
 import ufl
 from mpi4py import MPI
+from scipy.interpolate import CubicSpline
 
 from . import theory
 from .boundary import HubRoot, facet_condition, rotation_matrix
@@ -50,7 +54,7 @@ from .geometry import (
     create_strip_mesh,
     hub_axis_point,
 )
-from .shell import NaghdiShell, ShellMaterial
+from .shell import NaghdiShell, Nodes, ShellMaterial
 from .solvers import SNESSolver
 from .verification import _cell_midpoint_values, _global_scalar
 
@@ -61,6 +65,59 @@ _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
 def _smoothstep(x: np.ndarray) -> np.ndarray:
     s = np.clip(x, 0.0, 1.0)
     return s * s * (3.0 - 2.0 * s)
+
+
+def choose_predictor(setting: str, element_length: float, r_hub: float) -> str:
+    """The predictor of a run: the setting, or for "auto" the shift where the mesh resolves the coil.
+
+    The shift interpolates the state along the tape, which needs elements short against the
+    turn they are wound into: measured on the benchmark (36 rad, 2 ranks, each predictor with
+    its own largest step), the default mesh (4 mm elements, 0.31 of the hub radius) took 442
+    Newton iterations with the shift against 1,427 with the secant; the coarse mesh (12.5 mm,
+    0.98 of the hub radius) 6,745 against 4,266. "auto" takes the shift up to elements of half
+    the hub radius.
+    """
+    if setting != "auto":
+        return setting
+    return "shift" if element_length <= 0.5 * r_hub else "secant"
+
+
+class AlongTape:
+    """Values of the nodal state at points moved along the tape (xi_1), on every rank.
+
+    The Q2 nodes lie on lines of constant xi_2 running the length of the tape. Each rank gathers
+    the owned nodes' values (five per node: the whole state is some ten thousand numbers) and
+    interpolates every line with a cubic spline through its nodes, so no rank needs more than its
+    own nodes and every rank gets the same value at a shared node. A shift by a whole element
+    reproduces the nodal values exactly.
+    """
+
+    def __init__(self, nodes: Nodes, comm):
+        self.nodes, self.comm = nodes, comm
+        self.n_owned = nodes.space.dofmap.index_map.size_local
+        xi = np.hstack(comm.allgather(nodes.xi[:, : self.n_owned]))
+        # lines: clusters of equal xi_2 (up to round-off), far apart compared with round-off
+        levels = np.sort(xi[1])
+        gap = 1e-9 * float(np.ptp(levels))
+        breaks = levels[np.nonzero(np.diff(levels) > gap)[0] + 1]
+        line_global = np.searchsorted(breaks, xi[1] + gap, side="right")
+        line_local = np.searchsorted(breaks, nodes.xi[1] + gap, side="right")
+        self.lines = []
+        for k in range(len(breaks) + 1):
+            members = np.nonzero(line_global == k)[0]
+            members = members[np.argsort(xi[0, members])]
+            self.lines.append((members, xi[0, members], np.nonzero(line_local == k)[0]))
+
+    def values_at(self, q: np.ndarray, shift: float) -> np.ndarray:
+        """(n, 5) array: u and theta at each local node's xi_1 + ``shift``, from the W-dof array q."""
+        nodes, n = self.nodes, self.n_owned
+        owned = np.column_stack([q[nodes.u_dofs[:n]], q[nodes.theta_dofs[:n]]])
+        values = np.vstack(self.comm.allgather(owned))
+        out = np.empty((nodes.xi.shape[1], values.shape[1]))
+        for members, xi1, local in self.lines:
+            spline = CubicSpline(xi1, values[members], axis=0)
+            out[local] = spline(nodes.xi[0, local] + shift)
+        return out
 
 
 class CoilingModel:
@@ -134,6 +191,8 @@ class CoilingModel:
         }
         self._reaction_form = None
         self._converged: list[tuple[float, np.ndarray]] = []
+        self.predictor = choose_predictor(config.coiling.predictor, self.element_length, r_hub)
+        self._along_tape = AlongTape(self.contact.nodes, comm) if self.predictor == "shift" else None
 
     # -- loading --------------------------------------------------------------------------
     def set_flattening(self, f: float) -> None:
@@ -146,27 +205,42 @@ class CoilingModel:
     def predict(self, angle_from: float, angle_to: float) -> None:
         """Initial guess at ``angle_to`` from the converged states at ``angle_from`` and before.
 
-        The secant extrapolation of the last two converged states carries the steady motion of
-        the free part and the ploy region; material already on the coil (winding angle more than
-        a radian behind the tangent point) instead turns rigidly with the hub, which the secant
-        would get wrong by r dtheta^2 / 2, a few thicknesses at 0.1 rad. The two are blended
-        over the last radian before the tangent point.
+        Material already on the coil (winding angle more than a radian behind the tangent point)
+        turns rigidly with the hub. Near the tangent point and beyond, coiling is steady in the
+        lab frame: the ploy region stays where it is while the tape runs through it, the free
+        part slides along the guide. So with ``predictor = "shift"`` every such point takes the
+        state of the material ds = r dtheta further back along the tape (r the radius of the turn
+        being wound), with u_x lowered by ds; the two are blended over the last radian before the
+        tangent point, where both hold. With ``"secant"`` that part is instead extrapolated from
+        the last two converged states, which gets the ploy region wrong by about r dtheta^2 / 2
+        (measurements in docs/coiling.md).
         """
         q = self.model.q.x.array
         current = q.copy()
         dtheta = angle_to - angle_from
-        last = self._converged[-2] if len(self._converged) == 2 else None
-        if last is not None and angle_from - last[0] > 0:
-            q += (current - last[1]) * (dtheta / (angle_from - last[0]))
         c = self.contact
         nodes = c.nodes
+        if self.predictor == "shift":
+            turn_radius = float(c.obstacle_radius(np.array([angle_from]))[0]) + 0.5 * c.h
+            ds = turn_radius * dtheta
+            shifted = self._along_tape.values_at(current, -ds)
+            q[nodes.u_dofs] = shifted[:, :3] - np.array([ds, 0.0, 0.0])
+            q[nodes.theta_dofs] = shifted[:, 3:]
+        else:
+            last = self._converged[-2] if len(self._converged) == 2 else None
+            if last is not None and angle_from - last[0] > 0:
+                q += (current - last[1]) * (dtheta / (angle_from - last[0]))
         w = _smoothstep(angle_from - c.psi.x.array)[:, None]
         a = self.axis_point[:, None]
         x = nodes.positions(current)
         turned = rotation_matrix(np.array([0.0, -1.0, 0.0]), dtheta) @ (x - a) + a - nodes.reference
         q[nodes.u_dofs] = w * turned.T + (1 - w) * q[nodes.u_dofs]
+        # a turn about the width axis changes theta_1 by -dtheta and leaves theta_0 as it is
         rotated = current[nodes.theta_dofs[:, 1]] - dtheta
         q[nodes.theta_dofs[:, 1]] = w[:, 0] * rotated + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 1]]
+        if self.predictor == "shift":
+            kept = current[nodes.theta_dofs[:, 0]]
+            q[nodes.theta_dofs[:, 0]] = w[:, 0] * kept + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 0]]
 
     def update(self, angle: float) -> None:
         """After a converged step: winding angles from the new state; keep it for the secant."""
@@ -281,15 +355,17 @@ class CoilingRun:
     ``on_step(row)`` is called (on every rank) after each converged step, e.g. for output.
     """
 
-    # steps of 0.05 to 0.3 rad, growing after steps that converge in at most 8 Newton iterations:
-    # on the coarse benchmark to 6 rad, 579 Newton iterations against 855 with (0.15 rad, 5)
-    max_step = 0.3  # rad
+    # the step grows after steps that converge in at most this many Newton iterations
     easy_iterations = 8
+    # the largest step [rad] of each predictor, unless coiling.max_step sets one. Benchmark,
+    # 36 rad on 2 ranks: with the shift, default mesh, 1.0 rad: 48 steps, 442 Newton iterations
+    # in all; 0.7 rad: 69 steps, 677. With the secant, 0.3 rad: default mesh 181 steps, 1,427;
+    # coarse mesh 270 steps, 4,266 (docs/coiling.md)
+    max_steps: ClassVar[dict[str, float]] = {"shift": 1.0, "secant": 0.3}
 
     def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None):
         self.m = model
-        if max_step is not None:
-            self.max_step = max_step
+        self.max_step = max_step or model.config.coiling.max_step or self.max_steps[model.predictor]
         self.on_step = on_step
         self.result = CoilingResult()
         self._last_potential = None

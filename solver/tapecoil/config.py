@@ -141,11 +141,18 @@ class CoilingConfig:
         hub_angle: total hub rotation to the stowed state [rad].
         tension: pull T at the free end, along the tangent guide line [N].
         flatten_steps: load steps used to flatten the root onto the hub before rotating [-].
+        predictor: initial guess of each load step: 'shift' (the state moved along the tape by
+            the length wound on: steady coiling), 'secant' (extrapolated from the last two
+            steps) or 'auto' (the shift where elements are at most half the hub radius long).
+        max_step: largest hub-angle step [rad]; 0 takes the predictor's own (1 rad for the
+            shift, 0.3 rad for the secant).
     """
 
     hub_angle: float = param(36.0, "rad", POSITIVE)
     tension: float = param(1.0, "N", NON_NEGATIVE)
     flatten_steps: int = param(4, "-", Range(1, 1000))
+    predictor: str = param("auto", "", ("auto", "shift", "secant"))
+    max_step: float = param(0.0, "rad", Range(0.0, math.pi))
 
 
 @dataclass
