@@ -77,18 +77,62 @@ def test_release_unspools_the_tape_and_balances_energy(deployed_short):
     assert max(r["max_penetration"] for r in h) < 0.5 * model.config.tape.h
 
 
-def test_nearly_trapezoidal_rule_has_no_spurious_energy_growth(stowed_short):
-    """rho_inf = 0.99 (almost no numerical damping): the energy is conserved to 0.2 %.
+def test_trapezoidal_rule_conserves_energy(stowed_short):
+    """rho_inf = 1, the energy-conserving trapezoidal rule: no numerical dissipation, no growth.
 
-    rho_inf = 1 itself is unstable here (see docs/deployment.md); 0.99 is the closest
-    setting the high-frequency rotary modes allow.
+    Over 12 ms of the short tape (measured: 196 steps, the energy balance closed to 2e-9 of the
+    stowed energy) the remainder strain + contact + kinetic - stowed - work of the release stays
+    at the Newton tolerance's level.
     """
-    _, result = deploy(stowed_short, short_stowed_config(rho_inf=0.99))
+    model, result = deploy(stowed_short, short_stowed_config(rho_inf=1.0))
+    assert model.scheme == "conserving"
     h = result.history
     stowed = h[0]["strain_energy"] + h[0]["contact_energy"]
     dissipated = np.array([r["dissipated_energy"] for r in h])
     assert h[-1]["kinetic_energy"] > 0.04 * stowed
-    assert np.abs(dissipated).max() < 0.002 * stowed
+    assert np.abs(dissipated).max() < 1e-7 * stowed
+
+
+def test_secant_forces_give_the_exact_energy_change(stowed_short):
+    """The discrete gradients of the shell's and the contact's energies, tested with a step,
+    give exactly the change of the energy between its two ends, for a step of any size."""
+    import dolfinx
+    import ufl
+
+    from tapecoil.verification import _global_scalar
+
+    model = stowed_short.model
+    contact = stowed_short.contact
+    q = model.q.x.array
+    stowed = q.copy()
+    q_old = dolfinx.fem.Function(model.W)
+    q_old.x.array[:] = stowed
+    energy = dolfinx.fem.form(model.strain_energy + contact.energy)
+    dd = model.director_variation(q_old)
+    work = sum(model.energy_secant_forms(q_old)) + contact.energy_secant_form(q_old, dd)
+    work = dolfinx.fem.form(work)
+    rng = np.random.default_rng(3)
+    nodes = contact.nodes
+    try:
+        for size in (1e-6, 1e-4):  # 1 % of h and a whole h (deep into the coil); rotations alike
+            step = np.zeros_like(q)
+            step[nodes.u_dofs] = size * rng.standard_normal(nodes.u_dofs.shape)
+            step[nodes.theta_dofs] = 100 * size * rng.standard_normal(nodes.theta_dofs.shape)
+            q[:] = stowed
+            e0 = _global_scalar(model, energy)
+            q[:] = stowed + step
+            e1 = _global_scalar(model, energy)
+            f = dolfinx.fem.Function(model.W)
+            dolfinx.fem.assemble_vector(f.x.array, work)
+            f.x.scatter_reverse(dolfinx.la.InsertMode.add)
+            assert float(np.dot(f.x.array, step)) == pytest.approx(e1 - e0, rel=1e-9)
+            # not the tangent at either end: the plain trapezoid of the end forces misses it
+            tangent = dolfinx.fem.form(ufl.derivative(model.strain_energy + contact.energy, model.q))
+            g1 = dolfinx.fem.Function(model.W)
+            dolfinx.fem.assemble_vector(g1.x.array, tangent)
+            assert abs(float(np.dot(g1.x.array, step)) - (e1 - e0)) > 1e-6 * abs(e1 - e0)
+    finally:
+        q[:] = stowed
 
 
 def test_lambda_of_a_straight_tape_leaving_the_hub(deployed_short):

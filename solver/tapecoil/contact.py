@@ -85,20 +85,14 @@ class CoilContact:
         self.nodes = Nodes(model)
         self.psi = dolfinx.fem.Function(self.nodes.space, name="winding_angle")
 
-        a = ufl.as_vector(self.axis_point)
-        face = model.phi - 0.5 * h * model.d - a
+        self.smoothing = smoothing
+        face = self._face(model.phi, model.d)
         self.radius = ufl.sqrt(face[0] ** 2 + face[2] ** 2)
         steps = sum(
             _smoothstep((self.psi - 2 * math.pi * k) / ramp_width + 1.0) for k in range(1, max_turns + 1)
         )
         self.obstacle = r_hub + h * steps
-        gap = self.obstacle - self.radius
-        if smoothing > 0.0:
-            # smooth Macaulay bracket: delta softplus(g / delta), stable for either sign
-            x = gap / smoothing
-            self.penetration = smoothing * (ufl.max_value(x, 0.0) + ufl.ln(1.0 + ufl.exp(-abs(x))))
-        else:
-            self.penetration = ufl.max_value(gap, 0.0)
+        self.penetration = self._bracket(self.obstacle - self.radius)
         # the hub carries the first turn up to the start of its climb; beyond, turns carry turns
         self.on_hub = ufl.conditional(ufl.lt(self.psi, 2 * math.pi - ramp_width), 1.0, 0.0)
         density = 0.5 * self.stiffness * self.penetration**2 * model.jacobian
@@ -106,6 +100,52 @@ class CoilContact:
         self.energy_hub = self.on_hub * density * model.dx
         self.energy_coil = (1.0 - self.on_hub) * density * model.dx
         self.hub_angle = 0.0
+
+    def _face(self, phi, d):
+        """The inner face's point relative to the hub axis, for a mid-surface point and director."""
+        return phi - 0.5 * self.h * d - ufl.as_vector(self.axis_point)
+
+    def _bracket(self, gap):
+        """The penetration <gap>: max(gap, 0), or its smooth version delta softplus(gap / delta)."""
+        delta = self.smoothing
+        if delta > 0.0:
+            x = gap / delta  # written to be stable for either sign
+            return delta * (ufl.max_value(x, 0.0) + ufl.ln(1.0 + ufl.exp(-abs(x))))
+        return ufl.max_value(gap, 0.0)
+
+    def energy_secant_form(self, q_old, director_variation):
+        """Contact virtual work in the direction dq, energy-consistent from q_old to q.
+
+        The penalty energy P(g) = k/2 <g>^2 of a quadrature point depends on the state through
+        the gap g = r_obs - rho only, rho = |face|_xz the face point's distance from the axis. Its
+        force is written as the secant slope (P(g1) - P(g0)) / (g1 - g0) (the tangent at the mean
+        gap when the gap hardly changes) times a variation of g that is exact along the step:
+        rho1 - rho0 = (f0 + f1) . (f1 - f0) / (rho0 + rho1) in the xz-plane, with the director
+        varied by ``director_variation`` (:meth:`NaghdiShell.director_variation`). Then the work
+        along the step is the change of the contact energy (the winding angles, which fix the
+        obstacle, are held through a step).
+        """
+        m = self.model
+        _, _, _, d0 = m.kinematics(q_old)
+        u0 = ufl.as_vector([q_old[i] for i in range(3)])
+        f0, f1 = self._face(m.phi0 + u0, d0), self._face(m.phi, m.d)
+        rho0 = ufl.sqrt(f0[0] ** 2 + f0[2] ** 2)
+        g0, g1 = self.obstacle - rho0, self.obstacle - self.radius
+        k = self.stiffness
+
+        def energy(g):
+            return 0.5 * k * self._bracket(g) ** 2
+
+        g_mid = ufl.variable(0.5 * (g0 + g1))
+        tangent = ufl.diff(energy(g_mid), g_mid)
+        change = g1 - g0
+        eps = 1e-6 * self.h  # below it, the secant's round-off would exceed its difference
+        secant = (energy(g1) - energy(g0)) / ufl.conditional(ufl.gt(abs(change), eps), change, 1.0)
+        slope = ufl.conditional(ufl.gt(abs(change), eps), secant, tangent)
+        du = ufl.split(m.dq)[0]
+        dface = du - 0.5 * self.h * director_variation
+        dg = -((f0[0] + f1[0]) * dface[0] + (f0[2] + f1[2]) * dface[2]) / (rho0 + self.radius)
+        return slope * dg * m.jacobian * m.dx
 
     def obstacle_radius(self, psi: np.ndarray) -> np.ndarray:
         """The staircase r_obs(psi) [m] in numpy (as in the forms)."""

@@ -34,7 +34,7 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import theory
+from . import compat, theory
 from .coiling import CoilingModel
 from .config import Config
 from .continuation import Continuation, ContinuationError, StepRecord
@@ -99,18 +99,7 @@ class DeploymentModel:
         rho, h = tp.density, tp.h
         self.translational = rho * h  # kg/m^2
         self.rotary = rho * h**3 / 12  # kg
-        dA = model.jacobian
-        du, dtheta = _parts(model.dq)
-
-        # the equation of motion at the generalized-alpha levels
-        a_u, a_theta = _parts(ti.a_m)
-        v_u, v_theta = _parts(ti.v_f)
-        _, theta_f = _parts(ti.q_f)
-        Dd_f, _, d_ddot = director_rates(model, theta_f, v_theta, a_theta)
-        translational = self.translational * ufl.dot(a_u, du) * dA * model.dx
-        rotary = self.rotary * ufl.dot(d_ddot, ufl.dot(Dd_f, dtheta)) * dA * model.dx
         self.energy = model.strain_energy + c.contact.energy
-        internal = ufl.derivative(self.energy, model.q, model.dq)
 
         # the hold on the free end (the guide and the pull of the coiling run), released over
         # release_time: a stiff spring to the stowed end plus the dead forces that held it there,
@@ -121,12 +110,47 @@ class DeploymentModel:
         self.stowed.x.array[:] = model.q.x.array
         u0, theta0 = _parts(self.stowed)
         u, theta = _parts(model.q)
+        du, dtheta = _parts(model.dq)
         ell = c.element_length
         k_hold = tp.E * tp.h / ell  # per unit edge length: an element's membrane stiffness
         spring = k_hold * (ufl.dot(u - u0, du) + ell**2 * ufl.dot(theta - theta0, dtheta))
-        spring = spring * model.ds(FREE_END)
-        self._spring_form = dolfinx.fem.form(spring)
-        F = translational + rotary + ti.force_average(internal) + ti.at_midpoint(self.hold_factor * spring)
+        # applied at the level q_f of the scheme; its work over a step is taken there too
+        hold = ti.at_midpoint(self.hold_factor * spring * model.ds(FREE_END))
+        self._hold_form = dolfinx.fem.form(hold)
+
+        self.scheme = "conserving" if self.rho_inf == 1.0 else "alpha"
+        if self.scheme == "alpha":
+            F, J, kinetic = self._alpha_forms(hold)
+            options = {"pc_type": "cholesky"}
+        else:
+            F, J, kinetic = self._conserving_forms(hold)
+            options = {}
+        self.solver = SNESSolver.from_config(F, J, model.q, self.bcs, cfg.solver, defaults=options)
+        self.kinetic_form = dolfinx.fem.form(kinetic * model.jacobian * model.dx)
+        self._internal_form = ufl.derivative(self.energy, model.q, model.dq)
+        self._end_dofs = self._owned_edge_dofs(FREE_END)
+        self._dead = _Magnitude(np.zeros(len(self._end_dofs)))
+        self.solver.point_forces.append(PointForce(self._end_dofs, self._dead))
+        self._dead_full = self._end_internal_force()
+        self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
+
+    def _alpha_forms(self, hold):
+        """Residual, Jacobian and kinetic energy density of generalized-alpha (rho_inf < 1).
+
+        The equation of motion at the generalized-alpha levels, internal forces averaged between
+        the two states (:meth:`GeneralizedAlpha.force_average`).
+        """
+        model, ti = self.model, self.integrator
+        dA = model.jacobian
+        du, dtheta = _parts(model.dq)
+        a_u, a_theta = _parts(ti.a_m)
+        _, v_theta = _parts(ti.v_f)
+        _, theta_f = _parts(ti.q_f)
+        Dd_f, _, d_ddot = director_rates(model, theta_f, v_theta, a_theta)
+        translational = self.translational * ufl.dot(a_u, du) * dA * model.dx
+        rotary = self.rotary * ufl.dot(d_ddot, ufl.dot(Dd_f, dtheta)) * dA * model.dx
+        internal = ufl.derivative(self.energy, model.q, model.dq)
+        F = translational + rotary + ti.force_average(internal) + hold
 
         # The Jacobian is exact but for the rotary inertia, linearised as its mass term alone
         # (rho h^3/12 Dd^T Dd (1 - alpha_m)/(beta dt^2)): its other parts (the turning of Dd,
@@ -141,21 +165,56 @@ class DeploymentModel:
             rotary_mass * ufl.dot(ufl.dot(Dd_f, dtheta_trial), ufl.dot(Dd_f, dtheta)) * dA * model.dx
         )
         J = ufl.derivative(F - rotary, model.q, trial) + rotary_mass
-        self.solver = SNESSolver.from_config(
-            F, J, model.q, self.bcs, cfg.solver, defaults={"pc_type": "cholesky"}
-        )
 
         # kinetic energy of the current state (velocity: the integrator's latest)
         v_u, v_theta = _parts(ti.v_old)
         _, d_dot, _ = director_rates(model, model.theta, v_theta)
         kinetic = 0.5 * (self.translational * ufl.dot(v_u, v_u) + self.rotary * ufl.dot(d_dot, d_dot))
-        self.kinetic_form = dolfinx.fem.form(kinetic * dA * model.dx)
-        self._internal_form = internal
-        self._end_dofs = self._owned_edge_dofs(FREE_END)
-        self._dead = _Magnitude(np.zeros(len(self._end_dofs)))
-        self.solver.point_forces.append(PointForce(self._end_dofs, self._dead))
-        self._dead_full = self._end_internal_force()
-        self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
+        return F, J, kinetic
+
+    def _conserving_forms(self, hold):
+        """Residual, Jacobian and kinetic energy density of the energy-conserving trapezoidal rule.
+
+        rho_inf = 1: the trapezoidal (average acceleration) Newmark rule, with every force that
+        derives from an energy written as its discrete gradient between the two states (the
+        shell's and the contact's energy_secant_form), and the rotary inertia written for the
+        director velocity, kept at the quadrature points: d'_{n+1} = 2 (d_{n+1} - d_n)/dt - d'_n
+        and rho h^3/12 (d'_{n+1} - d'_n)/dt . dd, with dd the director's discrete variation.
+        Tested with the step itself, every term is an exact difference (kinetic energies
+        included), so strain + contact + kinetic energy changes only by the work of the hold:
+        the scheme neither dissipates nor creates energy (Simo and Tarnow 1992; Gonzalez 1996),
+        which the plain trapezoidal rule does not guarantee for nonlinear shells.
+        """
+        import basix.ufl
+
+        model, ti, mesh = self.model, self.integrator, self.model.mesh
+        element = basix.ufl.quadrature_element(mesh.basix_cell(), value_shape=(3,), degree=model.q_full)
+        space = dolfinx.fem.functionspace(mesh, element)
+        self.director_rate = dolfinx.fem.Function(space, name="director_rate")
+        _, _, _, d_old = model.kinematics(ti.q_old)
+        dd = model.director_variation(ti.q_old)
+        rate = 2 * (model.d - d_old) / ti.dt - self.director_rate
+        self._new_director_rate = dolfinx.fem.Expression(rate, compat.interpolation_points(space))
+        du, _ = _parts(model.dq)
+        a_u, _ = _parts(ti.a_m)
+        inertia = self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(
+            (rate - self.director_rate) / ti.dt, dd
+        )
+        internal = sum(model.energy_secant_forms(ti.q_old)) + self.contact.energy_secant_form(ti.q_old, dd)
+        F = inertia * model.jacobian * model.dx + internal + hold
+        J = ufl.derivative(F, model.q, ufl.TrialFunction(model.W))
+        v_u, _ = _parts(ti.v_old)
+        kinetic = 0.5 * (
+            self.translational * ufl.dot(v_u, v_u)
+            + self.rotary * ufl.dot(self.director_rate, self.director_rate)
+        )
+        return F, J, kinetic
+
+    def advance(self) -> None:
+        """After a converged step: the new state, velocities and accelerations become the old."""
+        if self.scheme == "conserving":  # before q_old moves on
+            self.director_rate.interpolate(self._new_director_rate)
+        self.integrator.advance()
 
     def _owned_edge_dofs(self, tag: int) -> np.ndarray:
         """Owned W-dofs (local indices) of every state component on the edge ``tag``."""
@@ -194,21 +253,21 @@ class DeploymentModel:
         self.hold_factor.value = factor
         self._dead.value = factor * self._dead_full
 
-    def hold_force(self, t: float) -> np.ndarray:
-        """The hold's force on the tape at time t and the current state (local dof array)."""
-        f = dolfinx.fem.Function(self.model.W)
-        dolfinx.fem.assemble_vector(f.x.array, self._spring_form)
-        f.x.scatter_reverse(dolfinx.la.InsertMode.add)
-        out = -self.hold_at(t) * f.x.array
-        out[self._end_dofs] += self.hold_at(t) * self._dead_full
-        return out
+    def hold_work(self) -> float:
+        """The hold's work on the tape over the step just solved [J] (collective; before advance).
 
-    def work(self, force_before: np.ndarray, force_after: np.ndarray, dq: np.ndarray) -> float:
-        """Work of a force over a step, trapezoidal, on owned dofs [J] (collective)."""
+        Its force at the level where the scheme applies it (state q_f, hold factor of that time:
+        what the residual holds) dotted with the step.
+        """
+        f = dolfinx.fem.Function(self.model.W)
+        dolfinx.fem.assemble_vector(f.x.array, self._hold_form)
+        f.x.scatter_reverse(dolfinx.la.InsertMode.add)
+        force = -f.x.array
+        force[self._end_dofs] += self._dead.value
         W = self.model.W
         n = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
-        local = 0.5 * float(np.dot((force_before + force_after)[:n], dq[:n]))
-        return self.comm.allreduce(local, op=MPI.SUM)
+        dq = self.model.q.x.array[:n] - self.integrator.q_old.x.array[:n]
+        return self.comm.allreduce(float(np.dot(force[:n], dq)), op=MPI.SUM)
 
     # -- start ----------------------------------------------------------------------------------
     def initial_acceleration(self) -> None:
@@ -414,14 +473,9 @@ class DeploymentRun:
         def predict(t_from, t_to):
             ti.predict(t_to - t_from)
 
-        hold = {"force": m.hold_force(0.0)}
-
         def converged(step):
-            dq = m.model.q.x.array - ti.q_old.x.array
-            force = m.hold_force(step.load)
-            self.external_work += m.work(hold["force"], force, dq)
-            hold["force"] = force
-            ti.advance()
+            self.external_work += m.hold_work()
+            m.advance()
             clock["t"] = step.load
             m.update()
             row = self._row(step.load, step)

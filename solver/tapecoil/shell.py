@@ -91,6 +91,26 @@ def angles_from_director(d: np.ndarray, frame: tuple[np.ndarray, ...], theta1_ne
     return np.vstack([theta0, theta1])
 
 
+def director_secant(theta0, theta1, frame):
+    """A 3 x 2 discrete derivative of the director map between the total angles theta0 and theta1.
+
+    Dd_bar (theta1 - theta0) = d(theta1) - d(theta0) holds exactly (Gonzalez's discrete
+    gradient, applied to each component of d): the derivative at the midpoint plus a correction
+    along the step, which is of second order in the step. Steps below 1e-12 rad take the
+    midpoint derivative alone.
+    """
+    mid = ufl.variable(0.5 * (theta0 + theta1))
+    derivative = ufl.diff(director_from_angles(mid, frame), mid)
+    step = theta1 - theta0
+    length2 = ufl.dot(step, step)
+    rest = (
+        director_from_angles(theta1, frame) - director_from_angles(theta0, frame) - ufl.dot(derivative, step)
+    )
+    eps = 1e-24
+    weight = ufl.conditional(ufl.gt(length2, eps), 1.0 / ufl.max_value(length2, eps), 0.0)
+    return derivative + weight * ufl.outer(rest, step)
+
+
 class NaghdiShell:
     """The shell's function space, state, kinematics, energies and forms.
 
@@ -164,9 +184,7 @@ class NaghdiShell:
         self.phi = self.phi0 + self.u
         F = ufl.grad(self.phi)
         self.F = F
-        self.membrane_strain = 0.5 * (F.T * F - self.a0)
-        self.bending_strain = ufl.sym(F.T * ufl.grad(self.d)) - ufl.sym(J0.T * ufl.grad(n0))
-        self.shear_strain = F.T * self.d
+        self.membrane_strain, self.bending_strain, self.shear_strain = self._strains(F, self.d)
 
         E, nu, h = material.E, material.nu, material.h
         G = material.shear_modulus
@@ -188,22 +206,74 @@ class NaghdiShell:
             self._alpha = ufl.min_value(h**2 / area, 1.0)
         self.energy_membrane, self.energy_bending, self.energy_shear = self.energy_forms()
 
+    def _strains(self, F, d):
+        """Membrane, bending and shear strains of a deformation gradient F and director field d."""
+        J0 = self.J0
+        return (
+            0.5 * (F.T * F - self.a0),
+            ufl.sym(F.T * ufl.grad(d)) - ufl.sym(J0.T * ufl.grad(self.n0)),
+            F.T * d,
+        )
+
+    def kinematics(self, state):
+        """(u, theta, F, d) of a state-like Function or expression of the space W."""
+        u, theta = ufl.as_vector([state[i] for i in range(3)]), ufl.as_vector([state[3], state[4]])
+        return u, theta, self.J0 + ufl.grad(u), director_from_angles(self.theta_ref + theta, self.frame)
+
+    def director_variation(self, q_old):
+        """The virtual director Dd_bar dtheta of the step from ``q_old`` to q (see director_secant)."""
+        _, theta_old, _, _ = self.kinematics(q_old)
+        secant = director_secant(self.theta_ref + theta_old, self.theta_ref + self.theta, self.frame)
+        return ufl.dot(secant, ufl.split(self.dq)[1])
+
+    def energy_secant_forms(self, q_old):
+        """(membrane, bending, shear) internal virtual work, energy-consistent from q_old to q.
+
+        Each strain is at most quadratic in (F, d), so with the stresses of the mean strain and
+        the strain variations at the mean (F, d), and the director varied by its discrete
+        derivative, the work in the direction of the step, dq = q - q_old, is exactly the
+        change of each energy (Simo and Tarnow 1992; Gonzalez 1996):
+
+            sum(forms)(q - q_old) = E(q) - E(q_old).
+
+        The quadrature (PSRI split included) is that of :meth:`energy_forms`, so the identity
+        holds point by point.
+        """
+        _, _, F0, d0 = self.kinematics(q_old)
+        F1, d1 = self.F, self.d
+        strains = [0.5 * (a + b) for a, b in zip(self._strains(F0, d0), self._strains(F1, d1), strict=True)]
+        du = ufl.split(self.dq)[0]
+        dF, dd = ufl.grad(du), self.director_variation(q_old)
+        F, d, grad_d = 0.5 * (F0 + F1), 0.5 * (d0 + d1), 0.5 * (ufl.grad(d0) + ufl.grad(d1))
+        de = ufl.sym(F.T * dF)
+        dk = ufl.sym(F.T * ufl.grad(dd) + dF.T * grad_d)
+        dg = F.T * dd + dF.T * d
+        m = self.material
+        A, E, nu, h = self.A, m.E, m.nu, m.h
+        membrane = h * ufl.inner(_plane_stress(strains[0], A, E, nu), de)
+        bending = h**3 / 12 * ufl.inner(_plane_stress(strains[1], A, E, nu), dk)
+        shear = SHEAR_CORRECTION * m.shear_modulus * h * ufl.dot(ufl.dot(A, strains[2]), dg)
+        return self._integrate(membrane, bending, shear)
+
     def energy_forms(self, weight=1.0):
         """(membrane, bending, shear) energy forms, each integrand times ``weight``.
 
         Exactly the quadrature rules of the solve (PSRI split included), so that a weighted
         energy (a region's, say) is part of the energy that is minimised.
         """
+        return self._integrate(weight * self._psi_m, weight * self._psi_b, weight * self._psi_s)
+
+    def _integrate(self, membrane, bending, shear):
+        """Membrane, bending and shear densities as forms with the solve's quadrature (PSRI split)."""
         dA = self.jacobian
-        bending = weight * self._psi_b * dA * self.dx
         if self._alpha is None:
-            return weight * self._psi_m * dA * self.dx, bending, weight * self._psi_s * dA * self.dx
+            return membrane * dA * self.dx, bending * dA * self.dx, shear * dA * self.dx
         a = self._alpha
 
-        def split(psi):
-            return a * weight * psi * dA * self.dx + (1 - a) * weight * psi * dA * self.dx_reduced
+        def split(density):
+            return a * density * dA * self.dx + (1 - a) * density * dA * self.dx_reduced
 
-        return split(self._psi_m), bending, split(self._psi_s)
+        return split(membrane), bending * dA * self.dx, split(shear)
 
     # -- state access --------------------------------------------------------------------
     def director_frame_numpy(self, xi: np.ndarray):
