@@ -14,12 +14,11 @@ CASE ?= fold
 setup:
 	@$(ENV) setup
 
-# the main job: the theory report, then the benchmark pipeline on the coarse mesh: coiling to
-# the stowed state, then deployment from it (serial, so that the renders can be made)
+# the main job: the theory report, then the benchmark pipeline on the coarse mesh (coiling to
+# the stowed state, deployment from it, the report with its pictures) on $(NP) ranks
 demo: setup
 	$(RUN) python3 demos/theory_report.py
-	$(RUN) python3 demos/coiling.py $(MESH)
-	$(RUN) python3 demos/deployment.py $(MESH)
+	$(RUN) mpirun -n $(NP) python3 demos/benchmark.py $(MESH)
 
 test: setup
 	$(RUN) tools/run-tests serial

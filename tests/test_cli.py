@@ -1,9 +1,11 @@
 """The command line: theory table and JSON, and refusal of a broken configuration."""
 
+import csv
 import json
 import shutil
 import subprocess
 
+import numpy as np
 import pytest
 
 from tapecoil.cli import main
@@ -63,11 +65,22 @@ def test_coil_short_run_writes_results(tmp_path, capsys):
     path = tmp_path / "short.toml"
     path.write_text("[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.3\n[mesh]\npreset = 'coarse'\n")
     out = tmp_path / "out"
-    assert main(["coil", str(path), "--out", str(out), "--json"]) == 0
+    assert main(["coil", str(path), "--out", str(out), "--json", "--no-report"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["completed"] and summary["hub_angle"] == 0.3
-    for name in ("config.toml", "history.csv", "summary.json", "coil.bp", "stowed/meta.json"):
+    assert summary["completed"] and summary["coiling"]["hub_angle"] == 0.3
+    assert "deployment" not in summary
+    for name in (
+        "config.toml",
+        "coiling_history.csv",
+        "summary.json",
+        "coiling.bp",
+        "stowed/meta.json",
+        "run.log",
+    ):
         assert (out / name).exists(), name
+    rows = {r["quantity"]: r for r in summary["validation"]}
+    assert rows["outer_radius"]["tolerance"] == 0.02 and rows["outer_radius"]["phase"] == "coiling"
+    assert "coiling rad = 0.3 " in (out / "run.log").read_text()
 
 
 def test_deploy_refuses_a_missing_checkpoint(tmp_path, capsys):
@@ -76,33 +89,106 @@ def test_deploy_refuses_a_missing_checkpoint(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+SHORT_RUN = (
+    "[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.5\n[mesh]\npreset = 'coarse'\n"
+    "[deployment]\nt_end = 0.003\nrelease_time = 0.0005\n[output]\nvtx_every = 2\ncheckpoint_every = 2\n"
+)
+
+
 def test_run_pipeline_then_deploy_from_its_checkpoint(tmp_path, capsys):
     """tapecoil run (coil, stow, deploy) on a short tape, then tapecoil deploy from its checkpoint."""
     path = tmp_path / "short.toml"
-    path.write_text(
-        "[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.5\n[mesh]\npreset = 'coarse'\n"
-        "[deployment]\nt_end = 0.001\nrelease_time = 0.0005\n"
-    )
+    path.write_text(SHORT_RUN)
     out = tmp_path / "run"
     # stops at t_end before lambda = 1: exit status 1, but every result is written
-    assert main(["run", str(path), "--out", str(out), "--json"]) == 1
+    assert main(["run", str(path), "--out", str(out), "--json", "--no-report"]) == 1
     result = json.loads(capsys.readouterr().out)
-    assert result["coiling"]["completed"]
+    assert result["coiling"]["completed"] and not result["completed"]
     deployment = result["deployment"]
-    assert deployment["time"] == pytest.approx(0.001) and "t_end" in deployment["message"]
+    assert deployment["time"] == pytest.approx(0.003) and "t_end" in deployment["message"]
     for name in (
         "summary.json",
         "stowed/meta.json",
+        "coiling_history.csv",
         "deployment_history.csv",
-        "deployment_summary.json",
         "deployment.bp",
         "deployed/meta.json",
+        "snapshots/deployment_cells.npz",
     ):
         assert (out / name).exists(), name
+    assert json.loads((out / "summary.json").read_text()) == result
     # the deployment again, from the checkpoint (configuration read beside it)
-    assert main(["deploy", str(out / "stowed"), "--out", str(tmp_path / "again"), "--json"]) == 1
-    again = json.loads(capsys.readouterr().out)
+    again_dir = tmp_path / "again"
+    assert main(["deploy", str(out / "stowed"), "--out", str(again_dir), "--json", "--no-report"]) == 1
+    again = json.loads(capsys.readouterr().out)["deployment"]
     assert again["lambda"] == pytest.approx(deployment["lambda"], abs=1e-6)
     assert again["measures"]["energy"]["stowed"] == pytest.approx(
         deployment["measures"]["energy"]["stowed"], rel=1e-6
     )
+
+
+def _tapecoil(*args, **kwargs):
+    """The console script in a subprocess (signals reach it as they would from a terminal)."""
+    import sys
+
+    return subprocess.Popen([sys.executable, "-m", "tapecoil", *args], **kwargs)
+
+
+@pytest.mark.parametrize(("phase", "after"), [("coiling", 3), ("deployment", 5)])
+def test_a_stopped_run_resumes_to_the_same_result(tmp_path, phase, after):
+    """SIGTERM during the coiling or the deployment: the run stops after its step with the
+    checkpoint written (exit 143); --resume finishes it with the result of a run never stopped."""
+    import signal
+    import time
+
+    path = tmp_path / "short.toml"
+    path.write_text(SHORT_RUN)
+    whole, stopped = tmp_path / "whole", tmp_path / "stopped"
+    assert (
+        _tapecoil(
+            "run", str(path), "--out", str(whole), "--no-report", "--json", stdout=subprocess.DEVNULL
+        ).wait()
+        == 1
+    )
+    proc = _tapecoil("run", str(path), "--out", str(stopped), "--no-report", "--json", stdout=subprocess.PIPE)
+    log = stopped / "run.log"
+    marker = f"{phase} {'rad' if phase == 'coiling' else 's'} = "
+    deadline = time.monotonic() + 120
+    while not (log.is_file() and log.read_text().count(marker) >= after):
+        assert proc.poll() is None and time.monotonic() < deadline, "the run ended before it could be stopped"
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGTERM)
+    out, _ = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signal.SIGTERM
+    summary = json.loads(out)
+    assert summary["interrupted"] == "SIGTERM" and not summary["completed"]
+    assert (stopped / ("stowed" if phase == "coiling" else "deployed") / "meta.json").is_file()
+    assert (
+        _tapecoil(
+            "run",
+            str(path),
+            "--out",
+            str(stopped),
+            "--resume",
+            "--no-report",
+            "--json",
+            stdout=subprocess.DEVNULL,
+        ).wait()
+        == 1
+    )
+    a = json.loads((whole / "summary.json").read_text())
+    b = json.loads((stopped / "summary.json").read_text())
+    for key in ("coiling", "deployment"):
+        assert len(a[key]["measures"]) == len(b[key]["measures"])
+    for ra, rb in zip(a["validation"], b["validation"], strict=True):
+        assert ra["quantity"] == rb["quantity"]
+        assert rb["computed"] == pytest.approx(ra["computed"], rel=1e-8, abs=1e-14), ra["quantity"]
+    for name in ("coiling_history.csv", "deployment_history.csv"):
+        ha = list(csv.DictReader((whole / name).open()))
+        hb = list(csv.DictReader((stopped / name).open()))
+        assert len(ha) == len(hb), name
+        for key in ("strain_energy", "kinetic_energy", "lambda", "end_slide", "hub_angle", "time", "step"):
+            if key in ha[0]:
+                va = np.array([float(r[key]) for r in ha])
+                vb = np.array([float(r[key]) for r in hb])
+                assert np.allclose(va, vb, rtol=1e-8, atol=1e-14), (name, key)

@@ -180,7 +180,6 @@ def test_two_ranks_coil_as_one(predictor):
 def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
     """Coil to 0.5 rad, stop, resume from the checkpoint to 1 rad: as if never stopped."""
     import csv
-    import json
 
     from tapecoil.coiling import run_coiling
 
@@ -195,16 +194,17 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
     )
     direct, _ = run_coiling(short_tape(hub_angle=1.0), tmp_path / "direct", MPI.COMM_SELF, progress=False)
     assert resumed["completed"] and direct["completed"]
-    last = {}
-    for name in ("resumed", "direct"):
-        rows = list(csv.DictReader((tmp_path / name / "history.csv").open()))
-        last[name] = rows[-1]
-        assert json.loads((tmp_path / name / "summary.json").read_text())["hub_angle"] == pytest.approx(1.0)
-    # the resumed history starts at the checkpoint's angle
-    first = next(csv.DictReader((tmp_path / "resumed" / "history.csv").open()))
-    assert float(first["hub_angle"]) > 0.5
+    assert resumed["hub_angle"] == pytest.approx(1.0)
+    rows = {
+        name: list(csv.DictReader((tmp_path / name / "coiling_history.csv").open()))
+        for name in ("half", "resumed", "direct")
+    }
+    # the resumed history goes on from the checkpoint's: the first part is the stopped run's
+    assert rows["resumed"][: len(rows["half"])] == rows["half"]
+    assert float(rows["resumed"][len(rows["half"])]["hub_angle"]) > 0.5
     for key in ("strain_energy", "coiled_length", "end_slide"):
-        assert float(last["resumed"][key]) == pytest.approx(float(last["direct"][key]), rel=1e-5), key
+        assert float(rows["resumed"][-1][key]) == pytest.approx(float(rows["direct"][-1][key]), rel=1e-5), key
+    assert resumed["run"]["steps"] == len([r for r in rows["resumed"] if r["phase"] == "coil"])
 
 
 def test_along_tape_shift_reproduces_nodes_and_smooth_fields():

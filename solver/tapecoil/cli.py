@@ -132,90 +132,141 @@ def _entries(measures: dict):
             yield name, value["computed"], value["reference"], value["error"]
 
 
-def cmd_coil(args: argparse.Namespace) -> int:
-    config = _with_mesh(load_config(args.config), args.mesh)
-    from .coiling import run_coiling
-
-    directory = args.out or f"{config.output.directory}/coil"
-    summary, _ = run_coiling(config, directory, resume=args.resume, progress=not args.json)
-    if args.json:
-        _echo(json.dumps(summary, indent=2))
+def _print_phase(name: str, phase: dict, directory) -> None:
+    run = phase["run"]
+    if name == "coiling":
+        state = "stowed" if phase["completed"] else f"STOPPED: {phase['message']}"
+        where = f"coiling to {phase['hub_angle']:.4g} of {phase['target_hub_angle']:g} rad"
     else:
-        run = summary["run"]
-        state = "stowed" if summary["completed"] else f"STOPPED: {summary['message']}"
-        _echo(
-            f"coiling to {summary['hub_angle']:.4g} of {summary['target_hub_angle']:g} rad: {state}\n"
-            f"  mesh {run['mesh']} ({run['dofs']} dofs) on {run['ranks']} rank(s): {run['steps']} steps, "
-            f"{run['newton_iterations']} Newton iterations, {run['wall_time']:.1f} s; results in {directory}"
-        )
-        for name, computed, reference, error in _entries(summary["measures"]):
-            _echo(f"  {name:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}")
-    return 0 if summary["completed"] else 1
-
-
-def _print_deployment(summary: dict, directory) -> None:
-    run = summary["run"]
-    state = "deployed" if summary["completed"] else f"STOPPED: {summary['message']}"
+        state = "deployed" if phase["completed"] else f"STOPPED: {phase['message']}"
+        where = f"deployment to lambda = {phase['lambda']:.3f} at t = {phase['time']:.4g} s"
     _echo(
-        f"deployment to lambda = {summary['lambda']:.3f} at t = {summary['time']:.4g} s: {state}\n"
+        f"{where}: {state}\n"
         f"  mesh {run['mesh']} ({run['dofs']} dofs) on {run['ranks']} rank(s): {run['steps']} steps, "
         f"{run['newton_iterations']} Newton iterations, {run['wall_time']:.1f} s; results in {directory}"
     )
-    m = summary["measures"]
-    for name, computed, reference, error in _entries(m):
-        if computed is not None:
-            _echo(f"  {name:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}")
+    for name_, computed, reference, error in _entries(phase["measures"]):
+        if computed is None:
+            _echo(f"  {name_:<26} not reached; reference {reference:.5g}")
         else:
-            _echo(f"  {name:<26} not reached; reference {reference:.5g}")
-    e = m["energy"]
-    _echo(
-        f"  energy: stowed {e['stowed']:.4g} J, numerically dissipated at most "
-        f"{e['largest_dissipated_fraction']:.2%}, largest growth {e['largest_growth_fraction']:.2%}"
+            _echo(f"  {name_:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}")
+    if name == "deployment":
+        e = phase["measures"]["energy"]
+        _echo(
+            f"  energy: stowed {e['stowed']:.4g} J, numerically dissipated at most "
+            f"{e['largest_dissipated_fraction']:.2%}, largest growth {e['largest_growth_fraction']:.2%}"
+        )
+
+
+def _finish(args: argparse.Namespace, summary: dict, directory) -> int:
+    """Print the summary (JSON or a table) and return the exit status."""
+    from .pipeline import exit_status
+
+    if args.json:
+        _echo(json.dumps(summary, indent=2))
+    else:
+        for name in ("coiling", "deployment"):
+            if name in summary:
+                _print_phase(name, summary[name], directory)
+        if summary["interrupted"]:
+            _echo(f"interrupted ({summary['interrupted']}): continue with --resume")
+    return exit_status(summary)
+
+
+def _resume_path(value, directory, name):
+    """--resume [CHECKPOINT]: the checkpoint given, or the results directory's own."""
+    from pathlib import Path
+
+    from .checkpoint import is_checkpoint
+
+    if value is None:
+        return None
+    path = Path(value) if value else Path(directory) / name
+    if not is_checkpoint(path):
+        raise ConfigError(f"--resume: {path} is not a checkpoint (no meta.json and state.bp in it)")
+    return path
+
+
+def cmd_coil(args: argparse.Namespace) -> int:
+    from .pipeline import run
+
+    config = _with_mesh(load_config(args.config), args.mesh)
+    directory = args.out or f"{config.output.directory}/coil"
+    checkpoint = _resume_path(args.resume, directory, "stowed")
+    summary = run(
+        config,
+        directory,
+        phases=("coiling",),
+        coiling_checkpoint=checkpoint,
+        progress=not args.json,
+        report=False if args.no_report else None,
+        command="coil",
     )
+    return _finish(args, summary, directory)
 
 
 def _stowed_config(args: argparse.Namespace):
     """The configuration for a deployment: the file given, else the one beside the checkpoint."""
     from pathlib import Path
 
+    from .checkpoint import is_checkpoint
+
     stowed = Path(args.stowed)
-    if not (stowed / "meta.json").is_file() or not (stowed / "state.bp").exists():
+    if not is_checkpoint(stowed):
         raise ConfigError(f"{stowed} is not a stowed checkpoint (no meta.json and state.bp in it)")
     beside = stowed.parent / "config.toml"
     return load_config(args.config or (beside if beside.is_file() else None))
 
 
 def cmd_deploy(args: argparse.Namespace) -> int:
-    config = _stowed_config(args)
-    from .deployment import run_deployment
+    from .pipeline import run
 
+    config = _stowed_config(args)
     directory = args.out or f"{config.output.directory}/deploy"
-    summary, _ = run_deployment(config, directory, stowed=args.stowed, progress=not args.json)
-    if args.json:
-        _echo(json.dumps(summary, indent=2))
-    else:
-        _print_deployment(summary, directory)
-    return 0 if summary["completed"] else 1
+    if args.resume:
+        _resume_path("", directory, "deployed")
+    summary = run(
+        config,
+        directory,
+        phases=("deployment",),
+        resume=args.resume,
+        stowed=args.stowed,
+        progress=not args.json,
+        report=False if args.no_report else None,
+        command="deploy",
+    )
+    return _finish(args, summary, directory)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    config = _with_mesh(load_config(args.config), args.mesh)
-    from .coiling import run_coiling
-    from .deployment import run_deployment
+    """Coil, stow and deploy; with --resume, go on from the directory's checkpoints."""
+    from .pipeline import run
 
+    config = _with_mesh(load_config(args.config), args.mesh)
     directory = args.out or f"{config.output.directory}/run"
-    coil, model = run_coiling(config, directory, progress=not args.json)
-    out = {"coiling": coil}
-    if coil["completed"]:
-        out["deployment"], _ = run_deployment(config, directory, coiling=model, progress=not args.json)
-    if args.json:
-        _echo(json.dumps(out, indent=2))
-    else:
-        state = "stowed" if coil["completed"] else f"STOPPED: {coil['message']}"
-        _echo(f"coiling to {coil['hub_angle']:.4g} rad: {state} ({coil['run']['wall_time']:.1f} s)")
-        if "deployment" in out:
-            _print_deployment(out["deployment"], directory)
-    return 0 if coil["completed"] and out.get("deployment", {}).get("completed") else 1
+    if args.resume:
+        _resume_path("", directory, "stowed")
+    summary = run(
+        config,
+        directory,
+        resume=args.resume,
+        progress=not args.json,
+        report=False if args.no_report else None,
+    )
+    return _finish(args, summary, directory)
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .report import write_report
+
+    directory = Path(args.directory)
+    if not (directory / "summary.json").is_file():
+        raise ConfigError(f"{directory} is not a results directory (no summary.json in it)")
+    if _rank() == 0:
+        print(write_report(directory))
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -243,28 +294,49 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
     p.add_argument("--mesh", choices=("coarse", "default", "fine"), help="mesh preset (overrides the file)")
     p.add_argument("--out", help="results directory (default: <output.directory>/coil)")
-    p.add_argument("--resume", help="checkpoint directory (a previous run's stowed/) to continue from")
-    p.add_argument("--json", action="store_true", help="print the JSON summary")
+    p.add_argument(
+        "--resume",
+        nargs="?",
+        const="",
+        metavar="CHECKPOINT",
+        help="continue from a checkpoint (default: the results directory's stowed/), as if never stopped",
+    )
+    _common_run_options(p)
     p.set_defaults(func=cmd_coil)
 
     p = sub.add_parser("deploy", help="deploy from a stowed checkpoint (implicit dynamics)")
     p.add_argument("stowed", help="stowed checkpoint directory (a coiling run's stowed/)")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the one beside the checkpoint)")
     p.add_argument("--out", help="results directory (default: <output.directory>/deploy)")
-    p.add_argument("--json", action="store_true", help="print the JSON summary")
+    p.add_argument("--resume", action="store_true", help="continue from the results directory's deployed/")
+    _common_run_options(p)
     p.set_defaults(func=cmd_deploy)
 
     p = sub.add_parser("run", help="the whole pipeline: coil, stow, deploy")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
     p.add_argument("--mesh", choices=("coarse", "default", "fine"), help="mesh preset (overrides the file)")
     p.add_argument("--out", help="results directory (default: <output.directory>/run)")
-    p.add_argument("--json", action="store_true", help="print the JSON summaries")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue a stopped run from the results directory's checkpoints",
+    )
+    _common_run_options(p)
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("report", help="(re)make the pictures and report.html of a results directory")
+    p.add_argument("directory", help="results directory of tapecoil run, coil or deploy")
+    p.set_defaults(func=cmd_report)
 
     p = sub.add_parser("config", help="print a configuration as TOML (the defaults if none is given)")
     p.add_argument("config", nargs="?", help="TOML configuration to check and print")
     p.set_defaults(func=cmd_config)
     return parser
+
+
+def _common_run_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true", help="print the JSON summary (summary.json)")
+    p.add_argument("--no-report", action="store_true", help="skip the pictures and report.html")
 
 
 def cmd_config(args: argparse.Namespace) -> int:

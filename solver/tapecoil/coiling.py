@@ -27,7 +27,6 @@ as a magnitude.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -40,8 +39,9 @@ import ufl
 from mpi4py import MPI
 from scipy.interpolate import CubicSpline
 
-from . import theory
+from . import checkpoint, theory
 from .boundary import HubRoot, facet_condition, rotation_matrix
+from .checkpoint import state_parts
 from .config import Config
 from .contact import CoilContact, default_penalty
 from .continuation import Continuation, ContinuationError, Relaxation, StepRecord
@@ -56,7 +56,7 @@ from .geometry import (
 )
 from .shell import NaghdiShell, Nodes, ShellMaterial
 from .solvers import SNESSolver
-from .verification import _cell_midpoint_values, _global_scalar
+from .verification import _cell_midpoint_values, _dofs, _global_scalar
 
 # the pull at the free end rises with the flattening; the guide line is the hub's top tangent
 _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
@@ -247,6 +247,16 @@ class CoilingModel:
         self.contact.update(angle)
         self._converged = [*self._converged[-1:], (angle, self.model.q.x.array.copy())]
 
+    def previous_converged(self) -> tuple[float, np.ndarray] | None:
+        """(hub angle, state) of the converged step before the current one, if the secant uses it."""
+        if self.predictor != "secant" or len(self._converged) < 2:
+            return None
+        return self._converged[-2]
+
+    def set_previous_converged(self, angle: float, state: np.ndarray) -> None:
+        """Restore the secant's memory of the step before the current one (a restart)."""
+        self._converged = [(angle, state.copy())]
+
     # -- measures -------------------------------------------------------------------------
     def energies(self) -> dict[str, float]:
         out = {name: _global_scalar(self.model, form) for name, form in self.forms.items()}
@@ -363,13 +373,33 @@ class CoilingRun:
     # coarse mesh 270 steps, 4,266 (docs/coiling.md)
     max_steps: ClassVar[dict[str, float]] = {"shift": 1.0, "secant": 0.3}
 
-    def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None):
+    def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None, stop=None):
         self.m = model
         self.max_step = max_step or model.config.coiling.max_step or self.max_steps[model.predictor]
         self.on_step = on_step
+        self.stop = stop  # StopSignals: checked after every converged coiling step
         self.result = CoilingResult()
+        self.next_step = None  # the step the load stepping tries next (for a restart)
         self._last_potential = None
         self._t0 = time.perf_counter()
+
+    def restart_state(self) -> dict:
+        """What, besides the model's state, the stepping needs to go on as if never stopped."""
+        previous = self.m.previous_converged()
+        return {
+            "next_step": self.next_step,
+            "last_potential": self._last_potential,
+            "previous_angle": None if previous is None else previous[0],
+            "history": self.result.history,
+            "wall_time_before": self.result.history[-1]["wall_time"] if self.result.history else 0.0,
+        }
+
+    def restore(self, state: dict) -> None:
+        """Continue from :meth:`restart_state` (the model restored from the same checkpoint)."""
+        self.next_step = state["next_step"]
+        self._last_potential = state["last_potential"]
+        self.result.history = list(state["history"])
+        self._t0 -= state["wall_time_before"]
 
     def _row(self, phase: str, load: float, step: StepRecord) -> dict:
         m = self.m
@@ -442,7 +472,18 @@ class CoilingRun:
         cont.on_step = lambda step: self._row("flatten", step.load, step)
         cont.run(0.0, 1.0)
 
-    def coil(self, final_angle: float, start_angle: float = 0.0, stops: tuple[float, ...] = ()) -> None:
+    def coil(
+        self,
+        final_angle: float,
+        start_angle: float = 0.0,
+        stops: tuple[float, ...] = (),
+        first_step: float | None = None,
+    ) -> None:
+        """Turn the hub from ``start_angle`` to ``final_angle`` [rad], landing on ``stops``.
+
+        ``first_step`` [rad]: the first step to try (a restart's ``next_step``). Step limits are
+        absolute (radians), so a restarted run steps as the uninterrupted one would.
+        """
         m = self.m
         span = final_angle - start_angle
         # the step limits in radians, as fractions of the span the continuation works on
@@ -451,17 +492,20 @@ class CoilingRun:
             base,
             initial_step=min(min(0.05, self.max_step) / span, 1.0),
             max_step=min(self.max_step / span, 1.0),
-            min_step=min(base.min_step, 1e-4 / span),
+            min_step=min(base.min_step * m.config.coiling.hub_angle, 1e-4) / span,
         )
 
         def converged(step):
             m.update(step.load)
+            self.next_step = step.next_step
             self._row("coil", step.load, step)
+            if self.stop is not None:
+                self.stop.check(m.comm)
 
         m.update(start_angle)
         cont = self._continuation(m.set_hub_angle, control, predict=m.predict)
         cont.on_step = converged
-        cont.run(start_angle, final_angle, stops)
+        cont.run(start_angle, final_angle, stops, first_step=first_step)
 
     def run(self) -> CoilingResult:
         """Flatten and coil to ``config.coiling.hub_angle``; a failure keeps the last converged state."""
@@ -478,59 +522,36 @@ class CoilingRun:
 def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict) -> None:
     """The state a restart or the deployment needs: mesh and tags, u, theta, winding angle, meta.
 
-    adios4dolfinx (ADIOS2 BP) for the mesh and the functions; ``meta`` (hub angle, tension,
-    configuration) as JSON beside it.
+    adios4dolfinx (ADIOS2 BP) for the mesh and the functions (and, for the secant predictor,
+    the previous converged state); ``meta`` (hub angle, tension, the stepping's restart state)
+    as JSON beside it. Written atomically (:mod:`tapecoil.checkpoint`).
     """
-    import adios4dolfinx
-
-    path = Path(path)
-    if model.comm.rank == 0:
-        path.mkdir(parents=True, exist_ok=True)
-    model.comm.barrier()
-    bp = path / "state.bp"
-    mesh = model.strip.mesh
-    adios4dolfinx.write_mesh(bp, mesh)
-    adios4dolfinx.write_meshtags(bp, mesh, model.strip.facet_tags, meshtag_name="facets")
-    adios4dolfinx.write_meshtags(bp, mesh, model.strip.cell_tags, meshtag_name="cells")
-    for name, function in _checkpoint_functions(model).items():
-        adios4dolfinx.write_function(bp, function, name=name)
-    if model.comm.rank == 0:
-        (path / "meta.json").write_text(json.dumps(meta, indent=2))
-    model.comm.barrier()
-
-
-def _checkpoint_functions(model: CoilingModel) -> dict:
-    """The functions a checkpoint holds: u and theta (collapsed copies) and the winding angle."""
-    out = {}
-    for name, i in (("displacement", 0), ("rotation", 1)):
-        V, dofs = model.model.W.sub(i).collapse()
-        out[name] = dolfinx.fem.Function(V, name=name)
-        out[name].x.array[:] = model.model.q.x.array[dofs]
-    out["winding_angle"] = model.contact.psi
-    return out
+    functions = {**state_parts(model.model.q, ""), "winding_angle": model.contact.psi}
+    previous = model.previous_converged()
+    if previous is not None:
+        state = dolfinx.fem.Function(model.model.W)
+        state.x.array[:] = previous[1]
+        functions.update(state_parts(state, "previous_"))
+    checkpoint.write_checkpoint(path, model.strip, functions, meta, model.comm)
 
 
 def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[CoilingModel, dict]:
     """A :class:`CoilingModel` in the state written by :func:`write_checkpoint` (any rank count)."""
-    import adios4dolfinx
-
-    path = Path(path)
-    meta = json.loads((path / "meta.json").read_text())
-    bp = path / "state.bp"
-    mesh = adios4dolfinx.read_mesh(bp, comm)
-    facets = adios4dolfinx.read_meshtags(bp, mesh, meshtag_name="facets")
-    cells = adios4dolfinx.read_meshtags(bp, mesh, meshtag_name="cells")
+    meta = checkpoint.read_meta(path)
     tp = config.tape
-    res = MeshResolution(**meta["resolution"])
-    strip = StripMesh(mesh, cells, facets, StripGeometry(tp.R, tp.b, tp.L), res)
+    strip = checkpoint.read_strip(path, StripGeometry(tp.R, tp.b, tp.L), comm)
     model = CoilingModel(config, comm, strip=strip)
-    for name, i in (("displacement", 0), ("rotation", 1)):
-        V, dofs = model.model.W.sub(i).collapse()
-        f = dolfinx.fem.Function(V)
-        adios4dolfinx.read_function(bp, f, name=name)
-        model.model.q.x.array[dofs] = f.x.array
-    adios4dolfinx.read_function(bp, model.contact.psi, name="winding_angle")
-    model.model.q.x.scatter_forward()
+    W = model.model.W
+    parts = checkpoint.empty_state_parts(W, "")
+    checkpoint.read_functions(path, {**parts, "winding_angle": model.contact.psi})
+    checkpoint.set_state(model.model.q, parts, "")
+    previous_angle = meta.get("run", {}).get("previous_angle")
+    if previous_angle is not None:
+        previous = checkpoint.empty_state_parts(W, "previous_")
+        checkpoint.read_functions(path, previous)
+        state = dolfinx.fem.Function(W)
+        checkpoint.set_state(state, previous, "previous_")
+        model.set_previous_converged(previous_angle, state.x.array)
     model.contact.hub_angle = meta["hub_angle"]
     model.root.set(1.0, meta["hub_angle"])
     model.tension.value = meta["tension"]
@@ -681,20 +702,55 @@ def coil_measures(model: CoilingModel) -> dict:
     return out
 
 
-def _progress(comm, total: float, label: str, unit: str = "rad"):
-    """A tqdm bar on rank 0 (None elsewhere, or when tqdm is missing)."""
-    if comm.rank != 0:
-        return None
-    try:
-        from tqdm import tqdm
-    except ImportError:
-        return None
-    return tqdm(
-        total=round(total, 3),
-        desc=label,
-        unit=unit,
-        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} {unit} [{elapsed}<{remaining}] {postfix}",
-    )
+def coiled_cells(model: CoilingModel) -> dict[str, np.ndarray]:
+    """Cell-midpoint values of the current state for the pictures (collective, every rank).
+
+    Columns: xi_1, xi_2 [m], winding angle [rad], longitudinal and transverse curvature [1/m],
+    surface bending stresses sigma_x, sigma_y [Pa] (signed; see :func:`coil_measures`).
+    """
+    m, tp = model.model, model.config.tape
+    kx, ky = m.curvatures()
+    k = m.bending_strain
+    c = tp.E / (1 - tp.nu**2) * 0.5 * tp.h
+    stresses = [c * (k[0, 0] + tp.nu * k[1, 1]), c * (k[1, 1] + tp.nu * k[0, 0])]
+    _, cells = _cell_midpoint_values(m, [model.contact.psi, kx, ky, *stresses])
+    cells = np.vstack(model.comm.allgather(cells))
+    cells = cells[np.lexsort((cells[:, 1], cells[:, 0]))]
+    names = ("xi1", "xi2", "psi", "kappa_long", "kappa_trans", "sigma_x", "sigma_y")
+    return {name: cells[:, i] for i, name in enumerate(names)}
+
+
+def _coiling_summary(model: CoilingModel, run: CoilingRun, ploy: dict, interrupted, t_start: float) -> dict:
+    """The coiling phase's summary: measures against the theory and the run's figures."""
+    history, res, comm = run.result.history, model.strip.resolution, model.comm
+    measures = coil_measures(model)
+    if ploy:
+        measures["ploy_length_one_turn"] = ploy
+    timing = model.solver.timing_per_iteration()
+    return {
+        "completed": run.result.completed,
+        "message": run.result.message,
+        "interrupted": None if interrupted is None else interrupted.name,
+        "hub_angle": model.root.angle,
+        "target_hub_angle": model.config.coiling.hub_angle,
+        "measures": measures,
+        "run": {
+            "ranks": comm.size,
+            "dofs": _dofs(model.model),
+            "mesh": f"{res.along} x {res.across}",
+            "predictor": model.predictor,
+            "penalty": model.penalty,
+            "steps": len([r for r in history if r["phase"] == "coil"]),
+            "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
+            # this process's, including the attempts that failed and were cut back
+            "newton_iterations_total": int(model.solver.timings["iterations"]),
+            "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
+            "wall_time": history[-1]["wall_time"] if history else 0.0,
+            "process_wall_time": time.perf_counter() - t_start,
+            "assembly_per_iteration": timing["assembly"],
+            "linear_solve_per_iteration": timing["linear_solve"],
+        },
+    }
 
 
 def run_coiling(
@@ -703,97 +759,108 @@ def run_coiling(
     comm=MPI.COMM_WORLD,
     resume: str | Path | None = None,
     progress: bool = True,
+    stop=None,
 ) -> tuple[dict, CoilingModel]:
-    """Coil to the stowed state and write the results directory; returns the summary and model.
+    """Coil to the stowed state, writing into ``directory``; returns the phase summary and model.
 
-    ``directory`` receives: config.toml (the configuration used), history.csv (a row per
-    converged step), coil.bp (VTX snapshots every ``output.vtx_every`` steps and the last state),
-    stowed/ (the checkpoint: the last converged state, completed or not) and summary.json.
-    ``resume``: a checkpoint directory to continue from (its hub angle onwards).
+    ``directory`` receives coiling_history.csv (a row per converged step), coiling.bp and
+    snapshots/ (every ``output.vtx_every`` steps and the last state), coiled_cells.csv (the
+    final state at the cell midpoints) and stowed/ (the checkpoint: the latest converged state,
+    every ``output.checkpoint_every`` steps and at the end, completed or not). The caller writes
+    the configuration and summary.json (:mod:`tapecoil.results`).
+    ``resume``: a checkpoint directory to continue from (its hub angle, history and step size:
+    the run goes on as if it had never stopped). ``stop``: :class:`~tapecoil.interrupt.StopSignals`;
+    on a signal the run ends after the current step, writes everything and reports
+    ``interrupted`` in the summary.
     """
-    from .config import to_toml
-    from .output import ShellWriter, write_csv
+    from . import results
+    from .interrupt import Interrupted
+    from .output import write_csv
 
     directory = Path(directory)
-    if comm.rank == 0:
-        directory.mkdir(parents=True, exist_ok=True)
-        (directory / "config.toml").write_text(to_toml(config))
-    comm.barrier()
     t_start = time.perf_counter()
     if resume is not None:
         model, meta = read_checkpoint(resume, config, comm)
-        start_angle = meta["hub_angle"]
+        restart = meta.get("run")
+        if restart is None:
+            raise ValueError(f"{resume} holds no coiling restart state")
     else:
-        model, start_angle = CoilingModel(config, comm), 0.0
+        model, restart = CoilingModel(config, comm), None
+    res = model.strip.resolution
     target = config.coiling.hub_angle
-    bar = _progress(comm, target, "coiling") if progress else None
-    writer = ShellWriter(model.model, directory / "coil.bp")
-    count = [0]
+    run = CoilingRun(model, stop=stop)
+    if restart is not None:
+        run.restore(restart)
+        results.LOG.info("coiling resumed from %s at %.6g rad", resume, model.root.angle)
+    else:
+        results.LOG.info(
+            "coiling: mesh %d x %d, %d dofs on %d rank(s), predictor %s, to %g rad",
+            res.along,
+            res.across,
+            _dofs(model.model),
+            comm.size,
+            model.predictor,
+            target,
+        )
+    ploy = dict(restart.get("ploy") or {}) if restart else {}
+    if restart is not None and meta["completed"] and model.root.angle >= target:
+        # nothing left to do: the summary of the checkpoint's state (a resumed pipeline)
+        run.result.completed = True
+        return _coiling_summary(model, run, ploy, None, t_start), model
+    out = results.PhaseOutput(
+        directory, model.model, "coiling", config, comm, target, "rad", progress, restart
+    )
 
-    ploy = {}
+    def checkpoint_meta(completed: bool) -> dict:
+        state = {**run.restart_state(), "ploy": ploy, "output_count": out.count}
+        hub = {"hub_angle": model.root.angle, "tension": float(model.tension.value)}
+        return {"phase": "coiling", **hub, "completed": completed, "run": state}
 
     def on_step(row):
-        if row["phase"] == "coil" and abs(row["hub_angle"] - 2 * math.pi) < 1e-9:
+        coiling = row["phase"] == "coil"
+        if coiling and abs(row["hub_angle"] - 2 * math.pi) < 1e-9:
             ploy.update(ploy_measure(model))  # one turn in: the free part is long
-        count[0] += 1
-        if count[0] % config.output.vtx_every == 0:
-            writer.write(row["hub_angle"])
-        if bar is not None:
-            bar.n = round(row["hub_angle"], 3)
-            bar.set_postfix_str(f"{row['phase']} step {row['step']:.3g} its {row['newton_iterations']}")
+        out.step(row["hub_angle"], row["step"], row["newton_iterations"], f" {row['phase']}", coiling)
 
-    run = CoilingRun(model, on_step=on_step)
+    if config.output.checkpoint:
+        out.checkpoint = lambda: write_checkpoint(model, directory / "stowed", checkpoint_meta(False))
+    run.on_step = on_step
+    interrupted = None
     try:
-        if resume is None:
+        if restart is None:
             run.flatten()
-        run.coil(target, start_angle=start_angle, stops=(2 * math.pi,))
+        run.coil(target, start_angle=model.root.angle, stops=(2 * math.pi,), first_step=run.next_step)
         run.result.completed = True
     except ContinuationError as err:
         run.result.message = str(err)
-    finally:
-        if bar is not None:
-            bar.close()
-    writer.write(model.root.angle)
-    writer.close()
-    wall = time.perf_counter() - t_start
+        results.LOG.error("coiling stopped: %s", err)
+    except Interrupted as err:
+        interrupted = err
+        run.result.message = str(err)
+        results.LOG.warning("coiling %s at %.6g rad; checkpoint written", err, model.root.angle)
+    out.close(model.root.angle)
     history = run.result.history
-    write_csv(directory / "history.csv", history, comm)
-    res = model.strip.resolution
-    meta = {
-        "hub_angle": model.root.angle,
-        "tension": float(model.tension.value),
-        "completed": run.result.completed,
-        "resolution": {"across": res.across, "along": res.along, "grading": res.grading},
-    }
+    write_csv(directory / "coiling_history.csv", history, comm)
     if config.output.checkpoint:
-        write_checkpoint(model, directory / "stowed", meta)
-    measures = coil_measures(model)
-    if ploy:
-        measures["ploy_length_one_turn"] = ploy
-    timing = model.solver.timing_per_iteration()
-    summary = {
-        "completed": run.result.completed,
-        "message": run.result.message,
-        "hub_angle": model.root.angle,
-        "target_hub_angle": target,
-        "measures": measures,
-        "run": {
-            "ranks": comm.size,
-            "dofs": model.model.W.dofmap.index_map.size_global * model.model.W.dofmap.index_map_bs,
-            "mesh": f"{res.along} x {res.across}",
-            "penalty": model.penalty,
-            "steps": len([r for r in history if r["phase"] == "coil"]),
-            "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
-            # including the attempts that failed and were cut back
-            "newton_iterations_total": int(model.solver.timings["iterations"]),
-            "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
-            "wall_time": wall,
-            "assembly_per_iteration": timing["assembly"],
-            "linear_solve_per_iteration": timing["linear_solve"],
-        },
-    }
+        write_checkpoint(model, directory / "stowed", checkpoint_meta(run.result.completed))
+    cells = coiled_cells(model)
     if comm.rank == 0:
-        (directory / "summary.json").write_text(json.dumps(summary, indent=2))
+        np.savetxt(
+            directory / "coiled_cells.csv",
+            np.column_stack(list(cells.values())),
+            delimiter=",",
+            header=",".join(cells),
+            comments="",
+        )
+    summary = _coiling_summary(model, run, ploy, interrupted, t_start)
+    results.LOG.info(
+        "coiling %s at %.6g rad: %d steps, %d Newton iterations, %.1f s",
+        "completed" if run.result.completed else "ended",
+        model.root.angle,
+        summary["run"]["steps"],
+        summary["run"]["newton_iterations"],
+        summary["run"]["wall_time"],
+    )
     return summary, model
 
 

@@ -263,13 +263,19 @@ class OutputConfig:
 
     Attributes:
         directory: results directory (created) [path].
-        vtx_every: write a VTX snapshot every this many steps [-].
-        checkpoint: write the stowed-state checkpoint [-].
+        vtx_every: write a VTX snapshot (and a surface snapshot for the pictures) every this
+            many steps [-].
+        checkpoint: write the checkpoints (the stowed state, the deployed state) [-].
+        checkpoint_every: also write the phase's checkpoint every this many steps, so that a
+            run killed outright can resume from there [-].
+        report: make the pictures and report.html at the end of a run [-].
     """
 
     directory: str = param("results", "")
-    vtx_every: int = param(10, "-", Range(1, 10**6))
+    vtx_every: int = param(5, "-", Range(1, 10**6))
     checkpoint: bool = param(True, "")
+    checkpoint_every: int = param(10, "-", Range(1, 10**6))
+    report: bool = param(True, "")
 
 
 @dataclass

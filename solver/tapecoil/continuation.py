@@ -32,7 +32,7 @@ class ContinuationError(RuntimeError):
 
 @dataclass
 class StepRecord:
-    """One converged load step."""
+    """One converged load step; ``next_step`` is the step the continuation will try next."""
 
     load: float
     step: float
@@ -40,6 +40,7 @@ class StepRecord:
     cutbacks: int
     relaxed: bool
     wall_time: float
+    next_step: float = 0.0
 
 
 @dataclass
@@ -111,15 +112,22 @@ class Continuation:
             relax.coefficient.value = 0.0
         return False, total
 
-    def run(self, t_start: float, t_end: float, stops: tuple[float, ...] = ()) -> list[StepRecord]:
-        """Step the load from t_start to t_end, landing exactly on every value in ``stops``."""
+    def run(
+        self, t_start: float, t_end: float, stops: tuple[float, ...] = (), first_step: float | None = None
+    ) -> list[StepRecord]:
+        """Step the load from t_start to t_end, landing exactly on every value in ``stops``.
+
+        ``first_step``: the step to try first (a restart passes the ``next_step`` of the last
+        record before the stop, so that it steps on as the uninterrupted run would have);
+        by default ``control.initial_step`` of the span.
+        """
         ctl = self.control
         span = t_end - t_start
         marks = sorted(
             {s for s in stops if t_start < s < t_end} | {t_end}, key=lambda s: (s - t_start) / span
         )
         t = t_start
-        dt = ctl.initial_step * span
+        dt = ctl.initial_step * span if first_step is None else first_step
         saved = self.state.x.array.copy()
         cutbacks = 0
         while marks:
@@ -155,10 +163,7 @@ class Continuation:
                         t,
                     )
                 relaxed = True
-            record = StepRecord(target, target - t, iterations, cutbacks, relaxed, time.perf_counter() - t0)
-            self.history.append(record)
-            if self.on_step is not None:
-                self.on_step(record)
+            step = target - t
             if target == marks[0]:
                 marks.pop(0)
             t = target
@@ -168,7 +173,11 @@ class Continuation:
             dt = math.copysign(min(abs(dt), ctl.max_step * abs(span)), span)
             if relaxed:  # restart gently after a snap
                 dt = ctl.initial_step * span
+            record = StepRecord(target, step, iterations, cutbacks, relaxed, time.perf_counter() - t0, dt)
+            self.history.append(record)
             cutbacks = 0
+            if self.on_step is not None:
+                self.on_step(record)
         return self.history
 
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -34,7 +33,8 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import compat, theory
+from . import checkpoint, compat, theory
+from .checkpoint import state_parts
 from .coiling import CoilingModel
 from .config import Config
 from .continuation import Continuation, ContinuationError, StepRecord
@@ -209,6 +209,25 @@ class DeploymentModel:
             + self.rotary * ufl.dot(self.director_rate, self.director_rate)
         )
         return F, J, kinetic
+
+    def restore(self, path: str | Path) -> None:
+        """Velocity, acceleration, the stowed state and the director velocity from a checkpoint
+        written by :func:`write_deployment_checkpoint` (the state itself is already in place)."""
+        ti, W, q = self.integrator, self.model.W, self.model.q
+        parts = {}
+        for prefix in ("velocity_", "acceleration_", "stowed_"):
+            parts.update(checkpoint.empty_state_parts(W, prefix))
+        extra = {"director_rate": self.director_rate} if self.scheme == "conserving" else {}
+        checkpoint.read_functions(path, {**parts, **extra})
+        checkpoint.set_state(ti.v_old, parts, "velocity_")
+        checkpoint.set_state(ti.a_old, parts, "acceleration_")
+        checkpoint.set_state(self.stowed, parts, "stowed_")
+        # the hold's dead forces are what held the end in the stowed state
+        current = q.x.array.copy()
+        q.x.array[:] = self.stowed.x.array
+        self._dead_full = self._end_internal_force()
+        q.x.array[:] = current
+        ti.restart()
 
     def advance(self) -> None:
         """After a converged step: the new state, velocities and accelerations become the old."""
@@ -398,15 +417,41 @@ class DeploymentRun:
     # the coarse benchmark 56 steps against 83 with 5
     easy_iterations = 8
 
-    def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None):
+    def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None, stop=None):
         self.m = model
         self.on_step = on_step
+        self.stop = stop  # StopSignals: checked after every converged step
         d = model.config.deployment
         self.max_dt = max_dt if max_dt is not None else d.max_dt
         self.result = DeploymentResult()
         self.stowed_energy = None
         self.external_work = 0.0
+        self.time = 0.0
+        self.next_step = None  # the step to try next within the current phase (for a restart)
+        self._restored = False
         self._t0 = time.perf_counter()
+
+    def restart_state(self) -> dict:
+        """What, besides the model's state, the time stepping needs to go on as if never stopped."""
+        h = self.result.history
+        return {
+            "time": self.time,
+            "next_step": self.next_step,
+            "external_work": self.external_work,
+            "stowed_energy": self.stowed_energy,
+            "history": h,
+            "wall_time_before": h[-1]["wall_time"] if h else 0.0,
+        }
+
+    def restore(self, state: dict) -> None:
+        """Continue from :meth:`restart_state` (the model restored from the same checkpoint)."""
+        self.time = state["time"]
+        self.next_step = state["next_step"]
+        self.external_work = state["external_work"]
+        self.stowed_energy = state["stowed_energy"]
+        self.result.history = list(state["history"])
+        self._t0 -= state["wall_time_before"]
+        self._restored = True
 
     def _row(self, t: float, step: StepRecord | None) -> dict:
         m = self.m
@@ -446,12 +491,20 @@ class DeploymentRun:
         return row
 
     def run(self) -> DeploymentResult:
+        """Step from release (or the restored time) until lambda_end, t_end or a failure.
+
+        :class:`~tapecoil.interrupt.Interrupted` (a stop signal) propagates, the state being
+        the last converged one.
+        """
         m = self.m
         cfg = m.config
         d = cfg.deployment
         ti = m.integrator
-        m.initial_acceleration()
-        self._row(0.0, None)
+        if not self._restored:
+            m.initial_acceleration()
+            self._row(0.0, None)
+        # absolute step limits [s], whatever the span left (a restart steps as the first run)
+        smallest = min(cfg.solver.min_step * d.t_end, 1e-3 * d.dt)
 
         def control(max_dt, span):
             """Step limits [s] as the fractions of the phase's span the continuation works in."""
@@ -459,28 +512,31 @@ class DeploymentRun:
                 cfg.solver,
                 initial_step=min(d.dt / span, 1.0),
                 max_step=min(max_dt / span, 1.0),
-                min_step=min(cfg.solver.min_step, 1e-3 * d.dt / span),
+                min_step=smallest / span,
             )
 
-        clock = {"t": 0.0}
         alpha_f = ti.parameters.alpha_f
 
         def set_time(target):
-            dt = target - clock["t"]
+            dt = target - self.time
             ti.set_step(dt)
             m.release(target - alpha_f * dt)  # the hold at the level of the internal forces
 
         def predict(t_from, t_to):
             ti.predict(t_to - t_from)
 
-        def converged(step):
+        def converged(step, end):
             self.external_work += m.hold_work()
             m.advance()
-            clock["t"] = step.load
+            self.time = step.load
+            # a phase that ends here hands over to the next one, which starts afresh
+            self.next_step = step.next_step if step.load < end else None
             m.update()
             row = self._row(step.load, step)
             if row["lambda"] >= d.lambda_end:
                 raise _Deployed
+            if self.stop is not None:
+                self.stop.check(m.comm)
 
         # the release in steps of at most a twentieth of it: the hold's spring is stiff and
         # its work is integrated over the steps; then the steps grow to max_dt
@@ -489,18 +545,19 @@ class DeploymentRun:
         phases.append((d.t_end, max(self.max_dt, d.dt)))
         try:
             for end, max_dt in phases:
-                if end <= clock["t"]:
+                if end <= self.time:
                     continue
                 cont = Continuation(
                     m.solver.solve,
                     set_time,
                     m.model.q,
-                    control(max_dt, end - clock["t"]),
+                    control(max_dt, end - self.time),
                     predict=predict,
                     easy_iterations=self.easy_iterations,
                 )
-                cont.on_step = converged
-                cont.run(clock["t"], end)
+                cont.on_step = lambda step, end=end: converged(step, end)
+                first, self.next_step = self.next_step, None
+                cont.run(self.time, end, first_step=first)
             self.result.message = f"t_end = {d.t_end:g} s reached before lambda = {d.lambda_end:g}"
         except _Deployed:
             self.result.completed = True
@@ -590,6 +647,68 @@ def deployment_measures(config, history: list[dict]) -> dict:
     }
 
 
+def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: dict) -> None:
+    """The deployment's restart state: the shell state and winding angles (as a coiling
+    checkpoint, so that ``tapecoil deploy`` can start from it too), velocity, acceleration, the
+    stowed state the release refers to and, for the conserving scheme, the director velocity."""
+    ti = model.integrator
+    functions = {
+        **state_parts(model.model.q, ""),
+        "winding_angle": model.contact.psi,
+        **state_parts(ti.v_old, "velocity_"),
+        **state_parts(ti.a_old, "acceleration_"),
+        **state_parts(model.stowed, "stowed_"),
+    }
+    if model.scheme == "conserving":
+        functions["director_rate"] = model.director_rate
+    checkpoint.write_checkpoint(path, model.coiling.strip, functions, meta, model.comm)
+
+
+def read_deployment_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD):
+    """A :class:`DeploymentModel` in the state of :func:`write_deployment_checkpoint`, and the meta."""
+    from .coiling import read_checkpoint
+
+    coiling, meta = read_checkpoint(path, config, comm)
+    model = DeploymentModel(coiling)
+    model.restore(path)
+    return model, meta
+
+
+def _deployment_summary(model: DeploymentModel, run: DeploymentRun, interrupted, t_start: float) -> dict:
+    """The deployment phase's summary: measures against the theory and the run's figures."""
+    history, comm = run.result.history, model.comm
+    res = model.coiling.strip.resolution
+    timing = model.solver.timing_per_iteration()
+    steps = history[1:]
+    return {
+        "completed": run.result.completed,
+        "message": run.result.message,
+        "interrupted": None if interrupted is None else interrupted.name,
+        "time": history[-1]["time"],
+        "lambda": history[-1]["lambda"],
+        "rho_inf": model.rho_inf,
+        "scheme": model.scheme,
+        "measures": deployment_measures(model.config, history),
+        "run": {
+            "ranks": comm.size,
+            "dofs": model.model.W.dofmap.index_map.size_global * model.model.W.dofmap.index_map_bs,
+            "mesh": f"{res.along} x {res.across}",
+            "steps": len(steps),
+            "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
+            # this process's, including the attempts that failed and were cut back
+            "newton_iterations_total": int(model.solver.timings["iterations"]),
+            "cutbacks": int(sum(r["cutbacks"] for r in steps)),
+            "smallest_step": min((r["step"] for r in steps), default=0.0),
+            "largest_step": max((r["step"] for r in steps), default=0.0),
+            "max_penetration": max(r["max_penetration"] for r in history),
+            "wall_time": history[-1]["wall_time"],
+            "process_wall_time": time.perf_counter() - t_start,
+            "assembly_per_iteration": timing["assembly"],
+            "linear_solve_per_iteration": timing["linear_solve"],
+        },
+    }
+
+
 def run_deployment(
     config: Config,
     directory: str | Path,
@@ -597,88 +716,97 @@ def run_deployment(
     stowed: str | Path | None = None,
     coiling: CoilingModel | None = None,
     progress: bool = True,
+    stop=None,
+    resume: str | Path | None = None,
 ) -> tuple[dict, DeploymentModel]:
-    """Deploy from the stowed state and write the results into ``directory``.
+    """Deploy from the stowed state, writing into ``directory``; returns the phase summary and model.
 
-    The stowed state is the checkpoint directory ``stowed`` or the in-memory ``coiling`` model.
-    ``directory`` receives deployment_history.csv (a row per step), deployment.bp (VTX every
-    ``output.vtx_every`` steps and the last state), deployed/ (the last converged state, as a
-    checkpoint) and deployment_summary.json.
+    The start is the stowed checkpoint directory ``stowed``, the in-memory ``coiling`` model, or,
+    with ``resume``, a deployment checkpoint (deployed/) to continue from as if never stopped.
+    ``directory`` receives deployment_history.csv (a row per step), deployment.bp and snapshots/
+    (every ``output.vtx_every`` steps and the last state) and deployed/ (the checkpoint: the
+    latest converged state, every ``output.checkpoint_every`` steps and at the end). ``stop``: as
+    in :func:`tapecoil.coiling.run_coiling`.
     """
-    from .coiling import _progress, read_checkpoint, write_checkpoint
-    from .output import ShellWriter, write_csv
+    from . import results
+    from .coiling import read_checkpoint
+    from .interrupt import Interrupted
+    from .output import write_csv
 
     directory = Path(directory)
-    if comm.rank == 0:
-        directory.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
     t_start = time.perf_counter()
-    if coiling is None:
-        if stowed is None:
-            raise ValueError("deployment needs a stowed checkpoint directory or a coiling model")
-        coiling, _ = read_checkpoint(stowed, config, comm)
-    model = DeploymentModel(coiling)
+    restart = None
+    if resume is not None:
+        model, meta = read_deployment_checkpoint(resume, config, comm)
+        restart = meta["run"]
+    else:
+        if coiling is None:
+            if stowed is None:
+                raise ValueError("deployment needs a stowed checkpoint directory or a coiling model")
+            coiling, _ = read_checkpoint(stowed, config, comm)
+        model = DeploymentModel(coiling)
+    coiling = model.coiling
     d = config.deployment
-    bar = _progress(comm, d.t_end, "deploying", unit="s") if progress else None
-    writer = ShellWriter(model.model, directory / "deployment.bp")
-    count = [0]
+    run = DeploymentRun(model, stop=stop)
+    if restart is not None:
+        run.restore(restart)
+        results.LOG.info("deployment resumed from %s at t = %.6g s", resume, run.time)
+    else:
+        results.LOG.info(
+            "deployment: %s scheme, rho_inf = %g, to lambda = %g", model.scheme, model.rho_inf, d.lambda_end
+        )
+    if restart is not None and meta["completed"]:
+        # nothing left to do: the summary of the checkpoint's state (a resumed pipeline)
+        run.result.completed = True
+        return _deployment_summary(model, run, None, t_start), model
+    out = results.PhaseOutput(
+        directory, model.model, "deployment", config, comm, d.t_end, "s", progress, restart
+    )
+
+    def checkpoint_meta(completed: bool) -> dict:
+        state = {**run.restart_state(), "output_count": out.count}
+        return {
+            "phase": "deployment",
+            "hub_angle": model.hub_angle,
+            "tension": 0.0,
+            "completed": completed,
+            "run": state,
+        }
 
     def on_step(row):
-        count[0] += 1
-        if count[0] % config.output.vtx_every == 0:
-            writer.write(row["time"])
-        if bar is not None:
-            bar.n = round(row["time"], 4)
-            bar.set_postfix_str(
-                f"lambda {row['lambda']:.3f} dt {row['step']:.2e} its {row['newton_iterations']}"
-            )
+        out.step(
+            row["time"],
+            row["step"],
+            row["newton_iterations"],
+            f" lambda {row['lambda']:.3f}",
+            row["step"] > 0,
+        )
 
-    run = DeploymentRun(model, on_step=on_step)
+    if config.output.checkpoint:
+        out.checkpoint = lambda: write_deployment_checkpoint(
+            model, directory / "deployed", checkpoint_meta(False)
+        )
+    run.on_step = on_step
+    interrupted = None
     try:
         run.run()
-    finally:
-        if bar is not None:
-            bar.close()
+    except Interrupted as err:
+        interrupted = err
+        run.result.message = str(err)
+        results.LOG.warning("deployment %s at t = %.6g s; checkpoint written", err, run.time)
     history = run.result.history
-    writer.write(history[-1]["time"])
-    writer.close()
+    out.close(history[-1]["time"])
     write_csv(directory / "deployment_history.csv", history, comm)
-    res = coiling.strip.resolution
-    meta = {
-        "hub_angle": model.hub_angle,
-        "tension": 0.0,
-        "time": history[-1]["time"],
-        "lambda": history[-1]["lambda"],
-        "completed": run.result.completed,
-        "resolution": {"across": res.across, "along": res.along, "grading": res.grading},
-    }
     if config.output.checkpoint:
-        write_checkpoint(coiling, directory / "deployed", meta)
-    timing = model.solver.timing_per_iteration()
-    steps = history[1:]
-    summary = {
-        "completed": run.result.completed,
-        "message": run.result.message,
-        "time": history[-1]["time"],
-        "lambda": history[-1]["lambda"],
-        "rho_inf": model.rho_inf,
-        "measures": deployment_measures(config, history),
-        "run": {
-            "ranks": comm.size,
-            "dofs": model.model.W.dofmap.index_map.size_global * model.model.W.dofmap.index_map_bs,
-            "mesh": f"{res.along} x {res.across}",
-            "steps": len(steps),
-            "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
-            "newton_iterations_total": int(model.solver.timings["iterations"]),
-            "cutbacks": int(sum(r["cutbacks"] for r in steps)),
-            "smallest_step": min((r["step"] for r in steps), default=0.0),
-            "largest_step": max((r["step"] for r in steps), default=0.0),
-            "max_penetration": max(r["max_penetration"] for r in history),
-            "wall_time": time.perf_counter() - t_start,
-            "assembly_per_iteration": timing["assembly"],
-            "linear_solve_per_iteration": timing["linear_solve"],
-        },
-    }
-    if comm.rank == 0:
-        (directory / "deployment_summary.json").write_text(json.dumps(summary, indent=2))
+        write_deployment_checkpoint(model, directory / "deployed", checkpoint_meta(run.result.completed))
+    summary = _deployment_summary(model, run, interrupted, t_start)
+    results.LOG.info(
+        "deployment %s at t = %.6g s, lambda = %.4f: %d steps, %d Newton iterations, %.1f s",
+        "completed" if run.result.completed else "ended",
+        summary["time"],
+        summary["lambda"],
+        summary["run"]["steps"],
+        summary["run"]["newton_iterations"],
+        summary["run"]["wall_time"],
+    )
     return summary, model

@@ -14,6 +14,7 @@ import csv
 from pathlib import Path
 
 import dolfinx
+import dolfinx.plot
 import numpy as np
 
 from . import compat
@@ -25,9 +26,23 @@ class NonFiniteStateError(RuntimeError):
 
 
 class ShellWriter:
-    """VTX time series of a shell's 3D shape and fields: ``write(t)`` after each step."""
+    """VTX time series of a shell's 3D shape and fields: ``write(t)`` after each step.
 
-    def __init__(self, model: NaghdiShell, path: str | Path):
+    With ``snapshots`` (a directory) every write also gathers the deformed surface and its
+    longitudinal curvature on rank 0 into ``<phase>_<n>.npz`` there (points and values; the
+    cells once, in ``<phase>_cells.npz``), from which pictures are made without ParaView and
+    whatever the number of ranks. ``first_index`` numbers the first snapshot (a resumed run
+    goes on counting).
+    """
+
+    def __init__(
+        self,
+        model: NaghdiShell,
+        path: str | Path,
+        snapshots: str | Path | None = None,
+        phase: str = "shell",
+        first_index: int = 0,
+    ):
         import basix.ufl
 
         self.model = model
@@ -49,6 +64,26 @@ class ShellWriter:
             self.fields.append((f, dolfinx.fem.Expression(expr, points)))
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         self.writer = dolfinx.io.VTXWriter(mesh.comm, str(path), [f for f, _ in self.fields], engine="BP4")
+        self.snapshots = None if snapshots is None else Path(snapshots)
+        self.phase, self.index = phase, first_index
+        if self.snapshots is not None:
+            cells, types, x = dolfinx.plot.vtk_mesh(V3)
+            self._local_points = x
+            pieces = mesh.comm.gather((cells, types, x.shape[0]), root=0)
+            if mesh.comm.rank == 0:
+                self.snapshots.mkdir(parents=True, exist_ok=True)
+                merged, offset = [], 0
+                for piece_cells, _, n_points in pieces:
+                    if piece_cells.size:  # VTK layout: node count, then the nodes, per cell
+                        c = piece_cells.reshape(-1, piece_cells[0] + 1).copy()
+                        c[:, 1:] += offset
+                        merged.append(c.ravel())
+                    offset += n_points
+                np.savez_compressed(
+                    self.snapshots / f"{phase}_cells.npz",
+                    cells=np.concatenate(merged),
+                    types=np.concatenate([p[1] for p in pieces]),
+                )
 
     def write(self, t: float) -> None:
         bad = 0
@@ -58,6 +93,23 @@ class ShellWriter:
         if self.model.mesh.comm.allreduce(bad):
             raise NonFiniteStateError(f"non-finite values in the state at t = {t:g}; not written")
         self.writer.write(t)
+        if self.snapshots is not None:
+            self._snapshot(t)
+
+    def _snapshot(self, t: float) -> None:
+        """Gather the deformed surface on rank 0 and save it (collective)."""
+        offset, kappa = self.fields[0][0], self.fields[3][0]
+        points = self._local_points + offset.x.array.reshape(-1, 3)
+        comm = self.model.mesh.comm
+        pieces = comm.gather((points.astype(np.float32), kappa.x.array.astype(np.float32)), root=0)
+        if comm.rank == 0:
+            np.savez_compressed(
+                self.snapshots / f"{self.phase}_{self.index:05d}.npz",
+                t=t,
+                points=np.vstack([p[0] for p in pieces]),
+                kappa_long=np.concatenate([p[1] for p in pieces]),
+            )
+        self.index += 1
 
     def close(self) -> None:
         self.writer.close()

@@ -108,3 +108,109 @@ def render_on_hub(model: NaghdiShell, axis_point, config, path: str | Path, titl
         clim=(0.0, 1.5),
         extra=[(hub, {"color": "tan", "opacity": 1.0})],
     )
+
+
+# -- pictures from the gathered snapshots of a run (any number of ranks) --------------------------
+def snapshot_grid(cells_file: str | Path, snapshot_file: str | Path, R: float):
+    """The surface of a snapshot (see :class:`tapecoil.output.ShellWriter`) as a PyVista grid,
+    coloured by the longitudinal curvature times R (its ``t`` in ``grid.field_data``)."""
+    import pyvista
+
+    cells = np.load(cells_file)
+    snap = np.load(snapshot_file)
+    grid = pyvista.UnstructuredGrid(cells["cells"], cells["types"], snap["points"].astype(float))
+    grid.point_data["kappa_long R"] = -snap["kappa_long"].astype(float) * R
+    grid.field_data["t"] = [float(snap["t"])]
+    return grid
+
+
+def _hub(axis_point, radius: float, width: float):
+    import pyvista
+
+    return pyvista.Cylinder(
+        center=axis_point, direction=(0, 1, 0), radius=radius, height=1.3 * width, resolution=120
+    )
+
+
+def _frame_camera(plotter, bounds, zoom: float = 1.0) -> None:
+    """A view along the hub axis, a little from above, framing ``bounds``."""
+    xmin, xmax, ymin, ymax, zmin, zmax = bounds
+    centre = np.array([(xmin + xmax) / 2, (ymin + ymax) / 2, (zmin + zmax) / 2])
+    size = max(xmax - xmin, zmax - zmin, 1e-3)
+    plotter.camera.focal_point = centre
+    plotter.camera.position = centre + np.array([0.15, -1.0, 0.25]) * 2.2 * size
+    plotter.camera.up = (0.0, 0.0, 1.0)
+    plotter.camera.zoom(zoom)
+
+
+def _union_bounds(grids):
+    b = np.array([g.bounds for g in grids])
+    return (b[:, 0].min(), b[:, 1].max(), b[:, 2].min(), b[:, 3].max(), b[:, 4].min(), b[:, 5].max())
+
+
+def render_snapshots(
+    files: list[Path],
+    cells_file: Path,
+    path: str | Path,
+    config,
+    axis_point,
+    titles: list[str],
+    shape: tuple[int, int] | None = None,
+    zoom: float = 1.0,
+) -> Path:
+    """One PNG with a panel per snapshot file, the hub drawn, a common colour scale."""
+    import pyvista
+
+    _ensure_display()
+    shape = shape or (1, len(files))
+    plotter = pyvista.Plotter(off_screen=True, shape=shape, window_size=(600 * shape[1], 450 * shape[0]))
+    plotter.set_background("white")
+    for i, (f, title) in enumerate(zip(files, titles, strict=True)):
+        plotter.subplot(*divmod(i, shape[1]))
+        grid = snapshot_grid(cells_file, f, config.tape.R)
+        plotter.add_mesh(
+            grid,
+            scalars="kappa_long R",
+            cmap="viridis",
+            clim=(0.0, 1.5),
+            smooth_shading=True,
+            scalar_bar_args={"title": "kappa_long R", "color": "black"},
+        )
+        plotter.add_mesh(_hub(axis_point, config.hub.radius, config.tape.b), color="tan")
+        plotter.add_text(title, font_size=11, color="black")
+        _frame_camera(plotter, grid.bounds, zoom)
+    path = Path(path)
+    plotter.screenshot(str(path))
+    plotter.close()
+    return path
+
+
+def animate_snapshots(
+    sequences: list[tuple[list[Path], Path, str]], path: str | Path, config, axis_point, fps: int = 8
+) -> Path:
+    """A GIF of every snapshot in order; ``sequences``: (snapshot files, cells file, label) per
+    phase. Each phase keeps one camera that frames all of its snapshots."""
+    import pyvista
+
+    _ensure_display()
+    plotter = pyvista.Plotter(off_screen=True, window_size=(800, 500))
+    plotter.set_background("white")
+    plotter.open_gif(str(path), fps=fps)
+    hub = _hub(axis_point, config.hub.radius, config.tape.b)
+    for files, cells_file, label in sequences:
+        grids = [snapshot_grid(cells_file, f, config.tape.R) for f in files]
+        if not grids:
+            continue
+        bounds = _union_bounds(grids)
+        unit = "rad" if label == "coiling" else "s"
+        for grid in grids:
+            plotter.clear()
+            plotter.add_mesh(
+                grid, scalars="kappa_long R", cmap="viridis", clim=(0.0, 1.5), show_scalar_bar=False
+            )
+            plotter.add_mesh(hub, color="tan")
+            plotter.add_text(f"{label}: {grid.field_data['t'][0]:.4g} {unit}", font_size=12, color="black")
+            _frame_camera(plotter, bounds)
+            plotter.write_frame()
+    plotter.close()
+    return Path(path)

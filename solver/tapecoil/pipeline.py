@@ -1,0 +1,111 @@
+"""A run in a results directory: coiling and/or deployment, with its log, graceful stops,
+summary.json and report. The command line, the demos and the sweeps all run through here.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+from . import __version__, results
+from .checkpoint import is_checkpoint, read_meta
+from .config import Config
+from .interrupt import StopSignals
+
+
+def run(
+    config: Config,
+    directory: str | Path,
+    phases: tuple[str, ...] = ("coiling", "deployment"),
+    comm=MPI.COMM_WORLD,
+    resume: bool = False,
+    coiling_checkpoint: str | Path | None = None,
+    stowed: str | Path | None = None,
+    progress: bool = True,
+    report: bool | None = None,
+    command: str = "run",
+) -> dict:
+    """Run ``phases`` into ``directory`` and return its summary (also written as summary.json).
+
+    ``phases``: ("coiling",), ("deployment",) (from the checkpoint ``stowed``) or both, the
+    deployment starting from the coiling's stowed state. ``resume``: go on from the directory's
+    own checkpoints (stowed/, deployed/) as if the run had never stopped; ``coiling_checkpoint``:
+    resume the coiling from that checkpoint instead. A stop signal (see
+    :mod:`tapecoil.interrupt`) ends the run after its current step with everything written and
+    ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
+    ``output.report``; rank 0, after the computation).
+    """
+    from .coiling import run_coiling
+    from .deployment import run_deployment
+
+    started = time.perf_counter()
+    directory = results.prepare_directory(directory, config, comm)
+    own_stowed, own_deployed = directory / "stowed", directory / "deployed"
+    handler = results.start_log(directory, comm)
+    try:
+        results.LOG.info(
+            "tapecoil %s %s: %d rank(s), results in %s", __version__, command, comm.size, directory
+        )
+        out: dict = {}
+        with StopSignals() as stop:
+            model = None
+            if "coiling" in phases:
+                resume_coil = coiling_checkpoint or (
+                    own_stowed if resume and is_checkpoint(own_stowed) else None
+                )
+                out["coiling"], model = run_coiling(
+                    config, directory, comm, resume=resume_coil, progress=progress, stop=stop
+                )
+            if "deployment" in phases and (model is None or out["coiling"]["completed"]):
+                resume_deploy = None
+                if (
+                    resume
+                    and is_checkpoint(own_deployed)
+                    and read_meta(own_deployed).get("phase") == "deployment"
+                ):
+                    resume_deploy = own_deployed
+                out["deployment"], _ = run_deployment(
+                    config,
+                    directory,
+                    comm,
+                    stowed=stowed,
+                    coiling=model,
+                    progress=progress,
+                    stop=stop,
+                    resume=resume_deploy,
+                )
+        summary = results.run_summary(out, started, comm)
+        results.write_summary(directory, summary, comm)
+        if (config.output.report if report is None else report) and not summary["interrupted"]:
+            make_report(directory, comm)
+    finally:
+        results.stop_log(handler)
+    return summary
+
+
+def make_report(directory: str | Path, comm=MPI.COMM_WORLD) -> Path | None:
+    """Pictures and report.html (rank 0); a failure to draw is logged, not fatal to the run."""
+    if comm.rank != 0:
+        return None
+    try:
+        from .report import write_report
+
+        path = write_report(directory)
+        results.LOG.info("report: %s", path)
+        return path
+    except Exception as exc:  # the results stand without their pictures
+        results.LOG.warning("report not made: %r", exc)
+        print(f"tapecoil: report not made: {exc!r}", file=sys.stderr)
+        return None
+
+
+def exit_status(summary: dict) -> int:
+    """0 when every phase completed, 128 + the signal's number when stopped by one, 1 otherwise."""
+    if summary["interrupted"]:
+        import signal
+
+        return 128 + int(signal.Signals[summary["interrupted"]])
+    return 0 if summary["completed"] else 1

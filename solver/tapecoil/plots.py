@@ -1,0 +1,264 @@
+"""Pictures of a results directory (matplotlib), each computed quantity drawn against the theory.
+
+Every function reads the files a run wrote (histories, coiled_cells.csv, summary.json,
+config.toml), draws one figure into ``directory/figures`` and returns its path, or None when the
+run has no data for it (a coiling-only run has no deployment pictures). Serial; no MPI.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from . import theory
+from .config import load_config
+
+
+def read_history(path: Path) -> dict[str, np.ndarray] | None:
+    """A history CSV as columns (numbers; empty cells are NaN, text columns kept as text)."""
+    if not path.is_file():
+        return None
+    with path.open() as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        return None
+    out = {}
+    for key in rows[0]:
+        values = [r[key] for r in rows]
+        try:
+            out[key] = np.array([float(v) if v != "" else np.nan for v in values])
+        except ValueError:
+            out[key] = np.array(values)
+    return out
+
+
+def _setup(directory: Path):
+    config = load_config(directory / "config.toml")
+    summary = json.loads((directory / "summary.json").read_text())
+    figures = directory / "figures"
+    figures.mkdir(exist_ok=True)
+    return config, summary, figures
+
+
+def _save(fig, path: Path) -> Path:
+    for ax in fig.axes:
+        ax.grid(alpha=0.3)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _coiling_rows(directory: Path):
+    h = read_history(directory / "coiling_history.csv")
+    if h is None:
+        return None
+    keep = h["phase"] == "coil"
+    return {k: v[keep] for k, v in h.items()}
+
+
+def coiling_energies(directory: Path) -> Path | None:
+    """Membrane, bending, shear and contact energy against hub angle, with the plate estimate."""
+    h = _coiling_rows(directory)
+    if h is None or len(h["hub_angle"]) == 0:
+        return None
+    config, _, figures = _setup(directory)
+    tp, r_hub = config.tape, config.hub.radius
+    angle = h["hub_angle"]
+    plate = [
+        theory.stored_energy(
+            theory.rotation_for_coiled_length(s, r_hub, tp.h), r_hub, tp.h, tp.R, tp.alpha, tp.D, tp.nu
+        )
+        for s in h["coiled_length"]
+    ]
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
+    ax[0].plot(angle, h["strain_energy"], label="strain energy, whole tape")
+    ax[0].plot(angle, plate, "--", label="plate estimate w(r) b x coiled length (physics.md Sec. 3)")
+    ax[0].set(xlabel="hub angle [rad]", ylabel="energy [J]", title="stored energy")
+    for key, label in (
+        ("bending_energy", "bending"),
+        ("membrane_energy", "membrane"),
+        ("shear_energy", "transverse shear"),
+        ("contact_energy_hub", "contact, hub"),
+        ("contact_energy_coil", "contact, coil on coil"),
+    ):
+        ax[1].semilogy(angle, np.maximum(h[key], 1e-12), label=label)
+    ax[1].set(xlabel="hub angle [rad]", ylabel="energy [J]", title="energy parts (log scale)")
+    return _save(fig, figures / "coiling_energies.png")
+
+
+def coiling_forces(directory: Path) -> Path | None:
+    """Tension at the free end, coiling tension T - N against Eq. 2.6, hub torque against steady coiling."""
+    h = _coiling_rows(directory)
+    if h is None or len(h["hub_angle"]) == 0:
+        return None
+    config, _, figures = _setup(directory)
+    tp, r_hub, T = config.tape, config.hub.radius, config.coiling.tension
+    angle = h["hub_angle"]
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
+    ax[0].plot(angle, h["tension"], label="pull held at the free end")
+    ax[0].plot(angle, h["coiling_tension"], label="coiling tension T - N (axial force N into the root)")
+    eq26 = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, r_hub)
+    ax[0].axhline(eq26, color="k", ls="--", lw=1, label=f"Eq. 2.6, r_c = r_hub: {eq26:.3f} N")
+    ax[0].set(xlabel="hub angle [rad]", ylabel="force [N]", title="tension")
+    rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
+    steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
+    ax[1].plot(angle, h["hub_torque"] * 1e3, ".-", label="shell (secant of the energy balance)")
+    ax[1].plot(angle, steady * 1e3, "--", label="steady coiling r (T + b w(r))")
+    ax[1].set(xlabel="hub angle [rad]", ylabel="hub torque [N mm]", title="hub torque")
+    return _save(fig, figures / "coiling_forces.png")
+
+
+def coil_radius(directory: Path) -> Path | None:
+    """Outer coil radius against hub angle and the radius of each turn, against the spiral."""
+    h = _coiling_rows(directory)
+    if h is None or len(h["hub_angle"]) == 0:
+        return None
+    config, summary, figures = _setup(directory)
+    tp, r_hub = config.tape, config.hub.radius
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
+    angle = h["hub_angle"]
+    wound = angle > math.pi  # before half a turn the probe sits at the lift-off point
+    ax[0].plot(angle[wound], h["outer_radius"][wound] * 1e3, label="shell: outer face, half a turn back")
+    ax[0].plot(
+        angle,
+        [theory.outer_radius_after_rotation(a, r_hub, tp.h) * 1e3 for a in angle],
+        "--",
+        label="r_hub + h theta / 2 pi",
+    )
+    ax[0].set(xlabel="hub angle [rad]", ylabel="radius [mm]", title="outer coil radius")
+    radii = summary.get("coiling", {}).get("measures", {}).get("turn_radii", [])
+    if radii:
+        n = np.arange(len(radii))
+        ax[1].plot(
+            n, (np.array(radii) - r_hub) / tp.h, "o", label="shell: centre line, half a turn from the root"
+        )
+        ax[1].plot(n, 0.5 + n, "--", label="r_n = r_hub + h/2 + n h (physics.md Sec. 2)")
+        ax[1].set(xlabel="turn n", ylabel="(r_n - r_hub) / h", title="radius of each turn")
+    return _save(fig, figures / "coil_radius.png")
+
+
+def coil_profiles(directory: Path) -> Path | None:
+    """Curvatures and surface stresses of the stowed coil along the length and across the width."""
+    path = directory / "coiled_cells.csv"
+    if not path.is_file():
+        return None
+    config, summary, figures = _setup(directory)
+    tp, r_hub, h = config.tape, config.hub.radius, config.tape.h
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    angle = summary["coiling"]["hub_angle"]
+    psi = data["psi"]
+    turn = np.floor(psi / (2 * math.pi))
+    rho = r_hub + h / 2 + h * turn
+    coiled = (psi > 1.0) & (psi < angle - 1.0)
+    centre = np.abs(data["xi2"]) <= np.min(np.abs(data["xi2"])) + 1e-12
+    sel = centre & coiled
+    if not sel.any():  # no coiled interior yet: nothing to draw
+        return None
+    # across the width: the row of cells of the coiled interior nearest the middle of the
+    # middle turn (half a turn from the root step)
+    target = 2 * math.pi * np.floor(angle / (4 * math.pi)) + math.pi
+    station = data["xi1"][sel][np.argmin(np.abs(psi[sel] - target))]
+    middle = coiled & np.isclose(data["xi1"], station, rtol=0, atol=1e-9)
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.4))
+    s = data["xi1"][sel] * 1e3
+    sx_ref, sy_ref = theory.coil_stresses(rho[sel], tp.R, tp.E, tp.nu, h / 2)
+    ax[0].plot(s, np.abs(data["kappa_long"][sel]) * rho[sel], ".", label="|kappa_long| x turn radius")
+    ax[0].plot(s, np.abs(data["kappa_trans"][sel]) * tp.R, ".", label="|kappa_trans| x R (flat: 0)")
+    ax[0].plot(s, np.abs(data["sigma_x"][sel]) / sx_ref, ".", label="|sigma_x| / plate theory")
+    ax[0].plot(s, np.abs(data["sigma_y"][sel]) / sy_ref, ".", label="|sigma_y| / plate theory")
+    ax[0].axhline(1.0, color="k", lw=0.8)
+    ax[0].set(
+        xlabel="position along the tape [mm]",
+        ylabel="ratio [-]",
+        title="along the coiled length (centre line)",
+        ylim=(-0.1, 1.4),
+    )
+    xi2 = data["xi2"][middle] / tp.b
+    sx_ref, sy_ref = theory.coil_stresses(rho[middle], tp.R, tp.E, tp.nu, h / 2)
+    order = np.argsort(xi2)
+    ax[1].plot(xi2[order], np.abs(data["sigma_x"][middle])[order] / 1e6, "o-", label="|sigma_x| shell")
+    ax[1].plot(xi2[order], sx_ref[order] / 1e6, "--", label="sigma_x plate theory")
+    ax[1].plot(xi2[order], np.abs(data["sigma_y"][middle])[order] / 1e6, "s-", label="|sigma_y| shell")
+    ax[1].plot(xi2[order], sy_ref[order] / 1e6, ":", label="sigma_y plate theory")
+    ax[1].axvspan(-0.3, 0.3, color="grey", alpha=0.1, label="inner 60 % of the width")
+    ax[1].set(
+        xlabel="position across the width / arc width [-]",
+        ylabel="surface stress at z = h/2 [MPa]",
+        title=f"across the width, {station * 1e3:.0f} mm from the root",
+    )
+    return _save(fig, figures / "coil_profiles.png")
+
+
+def deployment_lambda(directory: Path) -> Path | None:
+    """Deployed fraction lambda(t) against Eq. 2.20 and the modified ODE (mu and plate energy)."""
+    h = read_history(directory / "deployment_history.csv")
+    if h is None:
+        return None
+    from .deployment import deployment_reference
+
+    config, summary, figures = _setup(directory)
+    tp, r_hub = config.tape, config.hub.radius
+    lam0 = summary["deployment"]["measures"]["lambda0"]
+    t = h["time"]
+    ode = deployment_reference(config, lam0)
+    plate = deployment_reference(config, lam0, energy="plate")
+    tt = np.linspace(0.0, max(t[-1], ode.t100), 400)
+    k_hub = theory.seffen_rate(tp.mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    ax.plot(t, h["lambda"], lw=2, label="shell (lift-off point)")
+    ax.plot(tt, theory.deployed_fraction(tt, k_hub), "--", label="Eq. 2.20, r = r_hub, lambda0 = 0")
+    ax.plot(tt, ode(tt), ":", label=f"modified ODE (mu), r(lambda), lambda0 = {lam0:.3f}")
+    ax.plot(tt, plate(tt), "-.", label="the same ODE with the plate energy w(r)")
+    ax.axhline(0.9, color="grey", lw=0.5)
+    ax.set(xlabel="time [s]", ylabel="deployed fraction lambda", title="deployment", ylim=(0, 1.05))
+    return _save(fig, figures / "deployment_lambda.png")
+
+
+def deployment_energies(directory: Path) -> Path | None:
+    """Strain, kinetic, contact and numerically dissipated energy during the deployment."""
+    h = read_history(directory / "deployment_history.csv")
+    if h is None:
+        return None
+    _, summary, figures = _setup(directory)
+    stowed = summary["deployment"]["measures"]["energy"]["stowed"]
+    t = h["time"]
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    for key, label in (
+        ("strain_energy", "strain"),
+        ("kinetic_energy", "kinetic"),
+        ("contact_energy", "contact"),
+        ("dissipated_energy", "numerically dissipated"),
+    ):
+        ax.plot(t, h[key], label=label)
+    total = h["strain_energy"] + h["kinetic_energy"] + h["contact_energy"] + h["dissipated_energy"]
+    ax.plot(t, total - h["external_work"], "k--", label="sum - work of the release")
+    ax.axhline(stowed, color="grey", lw=0.5)
+    ax.set(xlabel="time [s]", ylabel="energy [J]", title="energy balance")
+    return _save(fig, figures / "deployment_energies.png")
+
+
+FIGURES = (
+    coiling_energies,
+    coiling_forces,
+    coil_radius,
+    coil_profiles,
+    deployment_lambda,
+    deployment_energies,
+)
+
+
+def all_figures(directory: str | Path) -> list[Path]:
+    """Every figure the directory has data for."""
+    directory = Path(directory)
+    return [p for p in (f(directory) for f in FIGURES) if p is not None]

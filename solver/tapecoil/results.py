@@ -1,0 +1,251 @@
+"""The results directory of a run: layout, per-step output, log, and the JSON summary.
+
+A run writes into one directory (``--out``)::
+
+    config.toml               the configuration used
+    summary.json              every validated quantity (computed, reference, error, tolerance),
+                              the run's figures (steps, Newton iterations, DOFs, wall time)
+    run.log                   what happened, step by step (rank 0)
+    coiling_history.csv       a row per converged load step
+    deployment_history.csv    a row per time step
+    coiling.bp, deployment.bp ParaView (VTX; Warp By Vector with ``offset``)
+    stowed/, deployed/        checkpoints: the latest converged state of each phase (adios4dolfinx)
+    snapshots/                the deformed surface at the VTX steps, gathered (for the pictures)
+    figures/, report.html     pictures and the report (tapecoil report)
+
+Every rank takes part in the collective steps; files are written by rank 0.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+from .config import Config, to_toml
+
+LOG = logging.getLogger("tapecoil")
+
+# Acceptance of each validated quantity (issues 4 and 5): relative tolerance on the error, or
+# None where the quantity is reported against its reference without a pass mark.
+TOLERANCES = {
+    ("coiling", "stored_energy_coiled"): 0.05,
+    ("coiling", "strain_energy_total"): None,
+    ("coiling", "curvature_longitudinal"): 0.05,
+    ("coiling", "stress_x"): 0.10,
+    ("coiling", "stress_y"): 0.10,
+    ("coiling", "outer_radius"): 0.02,
+    ("coiling", "turn_separation"): 0.10,
+    ("coiling", "first_turn_radius"): None,
+    ("deployment", "time_to_0.9"): 0.05,
+    ("deployment", "time_to_0.9_plate_energy"): 0.05,
+    ("deployment", "time_to_end"): None,
+}
+
+LABELS = {
+    "stored_energy_coiled": "stored strain energy of the coiled length [J]",
+    "strain_energy_total": "strain energy of the whole tape [J]",
+    "curvature_longitudinal": "longitudinal curvature x turn radius (coiled interior) [-]",
+    "stress_x": "surface stress sigma_x / plate theory (coiled interior) [-]",
+    "stress_y": "surface stress sigma_y / plate theory (coiled interior) [-]",
+    "outer_radius": "outer coil radius [m]",
+    "turn_separation": "radial step between turns / h [-]",
+    "first_turn_radius": "mid-surface radius of the first turn [m]",
+    "time_to_0.9": "time to lambda = 0.9, modified ODE (mu) [s]",
+    "time_to_0.9_plate_energy": "time to lambda = 0.9, the ODE with the plate energy w(r) [s]",
+    "time_to_end": "time to lambda = 1, modified ODE (mu) [s]",
+}
+
+
+def prepare_directory(directory: str | Path, config: Config, comm) -> Path:
+    """Create the directory and write the configuration used (collective)."""
+    directory = Path(directory)
+    if comm.rank == 0:
+        directory.mkdir(parents=True, exist_ok=True)
+        (directory / "config.toml").write_text(to_toml(config))
+    comm.barrier()
+    return directory
+
+
+def start_log(directory: str | Path, comm) -> logging.Handler | None:
+    """Log the ``tapecoil`` logger into ``directory``/run.log (appended; rank 0 only)."""
+    LOG.setLevel(logging.INFO)
+    if comm.rank != 0:
+        return None
+    handler = logging.FileHandler(Path(directory) / "run.log")
+    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s", "%Y-%m-%d %H:%M:%S"))
+    LOG.addHandler(handler)
+    return handler
+
+
+def stop_log(handler: logging.Handler | None) -> None:
+    if handler is not None:
+        LOG.removeHandler(handler)
+        handler.close()
+
+
+def progress_bar(comm, total: float, label: str, unit: str):
+    """A tqdm bar on rank 0 (None elsewhere, or when tqdm is missing)."""
+    if comm.rank != 0:
+        return None
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover - tqdm is a dependency
+        return None
+    return tqdm(
+        total=round(total, 4),
+        disable=None,  # no bar in logs (not a terminal)
+        desc=label,
+        unit=unit,
+        bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} " + unit + " [{elapsed}<{remaining}] {postfix}",
+    )
+
+
+class PhaseOutput:
+    """Per-step output of a phase (coiling or deployment): VTX and surface snapshots every
+    ``output.vtx_every`` steps, a checkpoint every ``output.checkpoint_every`` steps, the progress
+    bar, a log line.
+
+    ``checkpoint`` is the phase's own writer (collective), set by the caller. ``restart`` (the
+    restart state of a checkpoint) continues the step count, the snapshot numbering and, in a new
+    VTX file (``<phase>-2.bp``, ...), the ParaView series. Call :meth:`step` after each converged
+    step on every rank, :meth:`close` at the end.
+    """
+
+    def __init__(
+        self,
+        directory: Path,
+        model,
+        phase: str,
+        config: Config,
+        comm,
+        total,
+        unit,
+        progress=True,
+        restart=None,
+    ):
+        from .output import ShellWriter
+
+        self.phase, self.comm, self.unit = phase, comm, unit
+        self.output = config.output
+        self.count = restart["output_count"] if restart else 0
+        path = directory / f"{phase}.bp"
+        if restart:  # keep the series written before the stop
+            number = 2
+            while comm.bcast(path.exists() if comm.rank == 0 else None, root=0):
+                path, number = directory / f"{phase}-{number}.bp", number + 1
+        self.writer = ShellWriter(
+            model,
+            path,
+            snapshots=directory / "snapshots",
+            phase=phase,
+            first_index=self.count // self.output.vtx_every,
+        )
+        self.bar = progress_bar(comm, total, phase, unit) if progress else None
+        self.checkpoint = None
+
+    def step(self, value: float, step: float, iterations: int, extra: str = "", checkpoint=True) -> None:
+        """After a converged step at ``value`` (hub angle or time); ``checkpoint``: one may be written."""
+        self.count += 1
+        if self.count % self.output.vtx_every == 0:
+            self.writer.write(value)
+        if checkpoint and self.checkpoint is not None and self.count % self.output.checkpoint_every == 0:
+            self.checkpoint()
+        if self.bar is not None:
+            self.bar.n = round(value, 4)
+            self.bar.set_postfix_str(f"step {step:.3g} {self.unit} its {iterations}{extra}")
+        LOG.info("%s %s = %.6g step %.4g its %d%s", self.phase, self.unit, value, step, iterations, extra)
+
+    def close(self, value: float) -> None:
+        if self.bar is not None:
+            self.bar.close()
+        self.writer.write(value)
+        self.writer.close()
+
+
+def validation_rows(phase: str, measures: dict) -> list[dict]:
+    """The measures with a reference as rows: quantity, computed, reference, error, tolerance, pass."""
+    rows = []
+    for name, value in measures.items():
+        if not (isinstance(value, dict) and "computed" in value and "error" in value):
+            continue
+        tolerance = TOLERANCES.get((phase, name))
+        computed, error = value["computed"], value["error"]
+        passed = None
+        if tolerance is not None:
+            passed = (
+                computed is not None and error is not None and math.isfinite(error) and error <= tolerance
+            )
+        rows.append(
+            {
+                "phase": phase,
+                "quantity": name,
+                "label": LABELS.get(name, name),
+                "computed": computed,
+                "reference": value["reference"],
+                "error": error,
+                "tolerance": tolerance,
+                "passed": passed,
+            }
+        )
+    return rows
+
+
+def energy_rows(measures: dict) -> list[dict]:
+    """The deployment's energy balance as validation rows (numerical dissipation within 2 %)."""
+    e = measures["energy"]
+    return [
+        {
+            "phase": "deployment",
+            "quantity": "dissipated_energy",
+            "label": "numerically dissipated energy, largest / stowed energy [-]",
+            "computed": e["largest_dissipated_fraction"],
+            "reference": 0.0,
+            "error": e["largest_dissipated_fraction"],
+            "tolerance": 0.02,
+            "passed": e["largest_dissipated_fraction"] <= 0.02,
+        },
+        {
+            "phase": "deployment",
+            "quantity": "energy_growth",
+            "label": "spurious energy growth, largest / stowed energy [-]",
+            "computed": e["largest_growth_fraction"],
+            "reference": 0.0,
+            "error": e["largest_growth_fraction"],
+            "tolerance": 1e-3,
+            "passed": e["largest_growth_fraction"] <= 1e-3,
+        },
+    ]
+
+
+def write_summary(directory: str | Path, summary: dict, comm) -> None:
+    """summary.json (rank 0)."""
+    if comm.rank == 0:
+        (Path(directory) / "summary.json").write_text(json.dumps(summary, indent=2))
+
+
+def run_summary(phases: dict, started: float, comm=MPI.COMM_WORLD) -> dict:
+    """The directory's summary from the phases' summaries ("coiling", "deployment")."""
+    from . import __version__
+
+    rows = []
+    if "coiling" in phases:
+        rows += validation_rows("coiling", phases["coiling"]["measures"])
+    if "deployment" in phases:
+        m = phases["deployment"]["measures"]
+        rows += validation_rows("deployment", m) + energy_rows(m)
+    completed = all(p["completed"] for p in phases.values())
+    interrupted = next((p["interrupted"] for p in phases.values() if p.get("interrupted")), None)
+    return {
+        "tapecoil": __version__,
+        "completed": completed,
+        "interrupted": interrupted,
+        "ranks": comm.size,
+        "wall_time": time.perf_counter() - started,
+        "validation": rows,
+        **phases,
+    }
