@@ -256,6 +256,33 @@ def cmd_run(args: argparse.Namespace) -> int:
     return _finish(args, summary, directory)
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .sweep import load_sweep, run_sweep
+
+    sweep = load_sweep(args.sweep)
+    directory = args.out or f"{sweep.config({}).output.directory}/sweep-{Path(args.sweep).stem}"
+    summary = run_sweep(sweep, directory, progress=not args.json)
+    if args.json:
+        _echo(json.dumps(summary, indent=2))
+    else:
+        cases, groups = len(summary["cases"]), summary["groups"]
+        _echo(f"sweep ({summary['study']}): {cases} cases on {groups} group(s) of ranks")
+        rows = summary["cases"]
+        keys = [k for k in rows[0] if k != "case"]
+        _echo("  " + "  ".join(f"{k:>14}" for k in keys[:8]))
+        for r in rows:
+            _echo(
+                "  "
+                + "  ".join(
+                    f"{r[k]:>14.5g}" if isinstance(r[k], float) else f"{r[k]!s:>14}" for k in keys[:8]
+                )
+            )
+        _echo(f"  table: {directory}/sweep_summary.csv, plot: {summary['plot']}")
+    return 0
+
+
 def cmd_report(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -323,6 +350,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _common_run_options(p)
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("sweep", help="a parameter study, cases spread over MPI sub-communicators")
+    p.add_argument("sweep", help="sweep file: a configuration with a [sweep] table (see tapecoil.sweep)")
+    p.add_argument("--out", help="results directory (default: <output.directory>/sweep-<name>)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("report", help="(re)make the pictures and report.html of a results directory")
     p.add_argument("directory", help="results directory of tapecoil run, coil or deploy")

@@ -1,0 +1,294 @@
+"""Parameter studies: ``tapecoil sweep sweep.toml``, cases spread over MPI sub-communicators.
+
+A sweep file is a configuration file (the base case: any of its tables, defaults otherwise)
+with a ``[sweep]`` table::
+
+    [sweep]
+    study = "coiling_tension"      # or "coil" (coiling runs) or "run" (coil, stow, deploy)
+    ranks_per_case = 1             # the size of each case's sub-communicator
+
+    [sweep.parameters]             # every combination of these values is a case
+    "hub.radius_over_R" = [0.5, 0.6, 0.7, 0.8, 0.9]
+
+    [sweep.tension]                # options of the coiling_tension study (coiling.TensionStudy)
+    preset = "default"
+
+Parameters are configuration keys ("tape.h", "coiling.tension", ...) or "hub.radius_over_R",
+the hub radius as a fraction of tape.R. Every case's configuration is checked before anything is
+computed. Under ``mpirun -n N`` the ranks form N / ranks_per_case groups, and case i runs on group
+i mod groups, each into its own results directory ``case-NN-<values>``. Rank 0 then writes the
+summary table (sweep_summary.csv, sweep_summary.json) and a plot (sweep.png: the coiling tension
+against r_c/R with Eq. 2.6 and Eq. 2.9 drawn in, or each validated quantity's ratio to its
+reference against the first parameter).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import itertools
+import json
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from mpi4py import MPI
+
+from .config import Config, ConfigError, config_from_dict
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+STUDIES = ("coiling_tension", "coil", "run")
+DERIVED = ("hub.radius_over_R",)
+
+
+@dataclass
+class Sweep:
+    """A parsed sweep: the study, the base configuration (as a table) and the cases."""
+
+    study: str
+    base: dict
+    parameters: dict[str, list]
+    ranks_per_case: int
+    tension: dict
+
+    def cases(self) -> list[dict]:
+        """Every combination of the parameter values, in order: [{key: value, ...}, ...]."""
+        keys = list(self.parameters)
+        return [
+            dict(zip(keys, values, strict=True)) for values in itertools.product(*self.parameters.values())
+        ]
+
+    def config(self, case: dict) -> Config:
+        """The configuration of a case (checked: a bad value raises ConfigError naming it)."""
+        table = json.loads(json.dumps(self.base))  # a deep copy
+        # configuration keys first, then the derived ones (which refer to them)
+        for key, value in sorted(case.items(), key=lambda item: item[0] in DERIVED):
+            if key == "hub.radius_over_R":
+                tape = config_from_dict(json.loads(json.dumps(table))).tape
+                key, value = "hub.radius", value * tape.R
+            section, name = key.split(".")
+            table.setdefault(section, {})[name] = value
+        try:
+            return config_from_dict(table)
+        except ConfigError as err:
+            raise ConfigError(f"sweep case {case}: {err}") from None
+
+
+def load_sweep(path: str | Path) -> Sweep:
+    """Read and check a sweep file; every case's configuration is built once here."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ConfigError(f"sweep file not found: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path} is not valid TOML: {exc}") from None
+    table = data.pop("sweep", None)
+    if not isinstance(table, dict):
+        raise ConfigError(f"{path} has no [sweep] table")
+    known = {"study", "ranks_per_case", "parameters", "tension"}
+    unknown = set(table) - known
+    if unknown:
+        raise ConfigError(f"unknown key sweep.{sorted(unknown)[0]} (known: {', '.join(sorted(known))})")
+    study = table.get("study", "coiling_tension")
+    if study not in STUDIES:
+        raise ConfigError(
+            f"sweep.study = {study!r} is not allowed: must be one of {', '.join(map(repr, STUDIES))}"
+        )
+    ranks = table.get("ranks_per_case", 1)
+    if not isinstance(ranks, int) or isinstance(ranks, bool) or ranks < 1:
+        raise ConfigError(f"sweep.ranks_per_case must be an integer >= 1 (got {ranks!r})")
+    parameters = table.get("parameters", {})
+    if not parameters or not isinstance(parameters, dict):
+        raise ConfigError(
+            'sweep.parameters must be a table of lists of values, e.g. "hub.radius_over_R" = [0.5, 0.7]'
+        )
+    base_keys = {
+        f.name: {g.name for g in dataclasses.fields(f.default_factory)} for f in dataclasses.fields(Config)
+    }
+    for key, values in parameters.items():
+        if not isinstance(values, list) or not values:
+            raise ConfigError(f'sweep.parameters."{key}" must be a non-empty list of values')
+        section, _, name = key.partition(".")
+        if key not in DERIVED and name not in base_keys.get(section, ()):
+            raise ConfigError(
+                f'sweep.parameters."{key}" is neither a configuration key (section.key) nor one of {DERIVED}'
+            )
+    tension = table.get("tension", {})
+    from .coiling import TensionStudy
+
+    fields = {f.name for f in dataclasses.fields(TensionStudy)}
+    for key in tension:
+        if key not in fields:
+            raise ConfigError(f"unknown key sweep.tension.{key} (known: {', '.join(sorted(fields))})")
+    if study != "coiling_tension" and tension:
+        raise ConfigError("sweep.tension is for study = 'coiling_tension' only")
+    sweep = Sweep(study, data, parameters, ranks, tension)
+    config_from_dict(json.loads(json.dumps(data)))  # the base case itself
+    for case in sweep.cases():
+        sweep.config(case)
+    return sweep
+
+
+def case_name(index: int, case: dict) -> str:
+    values = ",".join(
+        f"{key.split('.')[-1]}={value:g}" if isinstance(value, float) else f"{key.split('.')[-1]}={value}"
+        for key, value in case.items()
+    )
+    return f"case-{index:02d}-{values}"
+
+
+def run_sweep(sweep: Sweep, directory: str | Path, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
+    """Run every case on its group of ranks, then write the summary table and plot (rank 0)."""
+    directory = Path(directory)
+    if comm.size % sweep.ranks_per_case:
+        raise ConfigError(
+            f"sweep.ranks_per_case = {sweep.ranks_per_case} does not divide the {comm.size} MPI ranks"
+        )
+    groups = comm.size // sweep.ranks_per_case
+    group = comm.rank // sweep.ranks_per_case
+    sub = comm.Split(color=group, key=comm.rank)
+    if comm.rank == 0:
+        directory.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    cases = sweep.cases()
+    mine = [(i, case) for i, case in enumerate(cases) if i % groups == group]
+    bar = None
+    if progress and comm.rank == 0:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(mine), desc=f"sweep (group 0 of {groups})", unit="case", disable=None)
+    for i, case in mine:
+        _run_case(sweep, i, case, directory / case_name(i, case), sub)
+        if bar is not None:
+            bar.update()
+    if bar is not None:
+        bar.close()
+    sub.Free()
+    comm.barrier()
+    summary = None
+    if comm.rank == 0:
+        summary = _summarise(sweep, cases, directory, groups)
+    return comm.bcast(summary, root=0)
+
+
+def _run_case(sweep: Sweep, index: int, case: dict, directory: Path, comm) -> None:
+    config = sweep.config(case)
+    if sweep.study == "coiling_tension":
+        from .coiling import TensionStudy, coiling_tension
+        from .output import write_csv
+        from .results import prepare_directory
+
+        prepare_directory(directory, config, comm)
+        options = {k: tuple(v) if isinstance(v, list) else v for k, v in sweep.tension.items()}
+        result = coiling_tension(config, comm, TensionStudy(**options))
+        write_csv(directory / "coiling_history.csv", result.pop("history"), comm)
+        if comm.rank == 0:
+            (directory / "summary.json").write_text(
+                json.dumps({"case": case, "coiling_tension": result}, indent=2)
+            )
+        return
+    from .pipeline import run
+
+    phases = ("coiling",) if sweep.study == "coil" else ("coiling", "deployment")
+    summary = run(config, directory, phases=phases, comm=comm, progress=False, report=False, command="sweep")
+    if comm.rank == 0:
+        summary["case"] = case
+        (directory / "summary.json").write_text(json.dumps(summary, indent=2))
+
+
+def _summarise(sweep: Sweep, cases: list[dict], directory: Path, groups: int) -> dict:
+    rows = []
+    for i, case in enumerate(cases):
+        summary = json.loads((directory / case_name(i, case) / "summary.json").read_text())
+        row = {"case": i, **case}
+        if sweep.study == "coiling_tension":
+            t = summary["coiling_tension"]
+            row.update(
+                {
+                    "ratio": t["ratio"],
+                    "coiling_tension": t["computed"],
+                    "eq_2_6": t["reference"],
+                    "error": t["error"],
+                    "eq_2_9": t["tension_dominated_eq_2_9"],
+                    "spread": t["spread"],
+                    "wall_time": t["wall_time"],
+                }
+            )
+        else:
+            row["completed"] = summary["completed"]
+            for v in summary["validation"]:
+                row[f"{v['phase']}.{v['quantity']}"] = v["computed"]
+                row[f"{v['phase']}.{v['quantity']}.reference"] = v["reference"]
+                row[f"{v['phase']}.{v['quantity']}.error"] = v["error"]
+        rows.append(row)
+    with (directory / "sweep_summary.csv").open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    out = {"study": sweep.study, "parameters": sweep.parameters, "groups": groups, "cases": rows}
+    (directory / "sweep_summary.json").write_text(json.dumps(out, indent=2))
+    out["plot"] = str(_plot(sweep, rows, directory))
+    return out
+
+
+def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    if sweep.study == "coiling_tension":
+        from . import theory
+
+        config = sweep.config({})
+        tp = config.tape
+        ratio = np.array([r["ratio"] for r in rows])
+        grid = np.linspace(0.9 * ratio.min(), 1.1 * ratio.max(), 200)
+        ax.plot(
+            grid,
+            [theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, x * tp.R) for x in grid],
+            "--",
+            label="Eq. 2.6 (bending-dominated)",
+        )
+        ax.plot(
+            grid,
+            [theory.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, x * tp.R) for x in grid],
+            ":",
+            label="Eq. 2.9 (tension-dominated)",
+        )
+        ax.errorbar(
+            ratio,
+            [r["coiling_tension"] for r in rows],
+            yerr=[r["spread"] for r in rows],
+            fmt="o",
+            capsize=3,
+            label="shell: mean T - N over the steady phase (bar: spread)",
+        )
+        ax.set(xlabel="r_c / R", ylabel="coiling tension [N]", title="steady coiling tension")
+    else:
+        key = next(iter(sweep.parameters))
+        x = np.array([r[key] for r in rows], dtype=float)
+        quantities = sorted({k[: -len(".reference")] for r in rows for k in r if k.endswith(".reference")})
+        for q in quantities:
+            ratios = [
+                r[q] / r[f"{q}.reference"] if r.get(q) is not None and r.get(f"{q}.reference") else math.nan
+                for r in rows
+            ]
+            ax.plot(x, ratios, "o-", label=q)
+        ax.axhline(1.0, color="k", lw=0.8)
+        ax.set(xlabel=key, ylabel="computed / reference", title=f"sweep: {sweep.study}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    path = directory / "sweep.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,110 @@
+"""Parameter sweeps: the sweep file is checked before anything runs; cases on sub-communicators."""
+
+import json
+
+import pytest
+from mpi4py import MPI
+
+from tapecoil.config import ConfigError
+
+TINY = """
+[tape]
+L = 0.1
+[mesh]
+preset = "coarse"
+[sweep]
+study = "coiling_tension"
+[sweep.parameters]
+"hub.radius_over_R" = [0.6, 0.9]
+[sweep.tension]
+preset = "coarse"
+length = 0.1
+hub_angle = 1.0
+window = [0.5, 1.0]
+max_step = 0.1
+"""
+
+
+def test_the_demo_sweep_file_is_valid():
+    from pathlib import Path
+
+    from tapecoil.sweep import load_sweep
+
+    sweep = load_sweep(Path(__file__).parents[1] / "demos" / "coiling_tension_sweep.toml")
+    cases = sweep.cases()
+    assert [c["hub.radius_over_R"] for c in cases] == [0.5, 0.6, 0.7, 0.8, 0.9]
+    assert sweep.config(cases[0]).hub.radius == pytest.approx(0.5 * 0.0151)
+
+
+def test_cases_are_every_combination(tmp_path):
+    from tapecoil.sweep import load_sweep
+
+    path = tmp_path / "s.toml"
+    path.write_text(
+        '[sweep]\nstudy = "coil"\n[sweep.parameters]\n'
+        '"tape.h" = [1e-4, 2e-4]\n"coiling.tension" = [1, 2, 3]\n'
+    )
+    sweep = load_sweep(path)
+    cases = sweep.cases()
+    assert len(cases) == 6 and cases[-1] == {"tape.h": 2e-4, "coiling.tension": 3}
+    assert sweep.config(cases[-1]).tape.h == 2e-4
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("[tape]\nL = 1\n", r"has no \[sweep\] table"),
+        ('[sweep]\nstudy = "dance"\n[sweep.parameters]\n"tape.h" = [1e-4]\n', r"sweep\.study = 'dance'"),
+        ('[sweep]\n[sweep.parameters]\n"tape.height" = [1e-4]\n', r'"tape\.height" is neither'),
+        ('[sweep]\n[sweep.parameters]\n"tape.h" = 1e-4\n', r"must be a non-empty list"),
+        ('[sweep]\nranks_per_case = 0\n[sweep.parameters]\n"tape.h" = [1e-4]\n', r"ranks_per_case"),
+        (
+            '[sweep]\n[sweep.parameters]\n"tape.nu" = [0.3, 0.7]\n',
+            r"sweep case .*tape\.nu = 0\.7 is out of range",
+        ),
+        (
+            '[sweep]\nstudy = "coil"\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.tension]\nlength = 1\n',
+            r"only",
+        ),
+        (
+            '[sweep]\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.tension]\nlen = 1\n',
+            r"sweep\.tension\.len",
+        ),
+    ],
+)
+def test_a_bad_sweep_is_refused_before_anything_runs(tmp_path, text, message):
+    from tapecoil.sweep import load_sweep
+
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_sweep(path)
+
+
+@pytest.mark.mpi
+def test_sweep_cases_on_sub_communicators_match_serial_runs(tmp_path):
+    """Two cases on two groups of one rank each: each agrees with the case run alone."""
+    from tapecoil.coiling import TensionStudy, coiling_tension
+    from tapecoil.sweep import case_name, load_sweep, run_sweep
+
+    comm = MPI.COMM_WORLD
+    directory = comm.bcast(str(tmp_path), root=0)
+    path = f"{directory}/tiny.toml"
+    if comm.rank == 0:
+        open(path, "w").write(TINY)
+    comm.barrier()
+    sweep = load_sweep(path)
+    summary = run_sweep(sweep, f"{directory}/out", comm, progress=False)
+    assert summary["groups"] == comm.size and len(summary["cases"]) == 2
+    for i, case in enumerate(sweep.cases()):
+        alone = coiling_tension(
+            sweep.config(case),
+            MPI.COMM_SELF,
+            TensionStudy(preset="coarse", length=0.1, hub_angle=1.0, window=(0.5, 1.0), max_step=0.1),
+        )
+        stored = json.loads(open(f"{directory}/out/{case_name(i, case)}/summary.json").read())
+        assert stored["coiling_tension"]["computed"] == pytest.approx(alone["computed"], rel=1e-8)
+        assert summary["cases"][i]["coiling_tension"] == pytest.approx(alone["computed"], rel=1e-8)
+    if comm.rank == 0:
+        assert (tmp_path / "out" / "sweep.png").is_file()
+        assert (tmp_path / "out" / "sweep_summary.csv").read_text().count("\n") == 3
