@@ -75,7 +75,7 @@ if rank0:
             )
     for row in summary["validation"]:
         error = "-" if row["error"] is None else f"{row['error']:.2%}"
-        tolerance = "reported" if row["tolerance"] is None else f"tolerance {row['tolerance']:.0%}"
+        tolerance = "reported" if row["tolerance"] is None else f"tolerance {100 * row['tolerance']:g}%"
         mark = {True: "pass", False: "FAIL", None: ""}[row["passed"]]
         computed = "not reached" if row["computed"] is None else f"{row['computed']:.5g}"
         print(

@@ -125,10 +125,11 @@ def snapshot_grid(cells_file: str | Path, snapshot_file: str | Path, R: float):
 
 
 def _hub(axis_point, radius: float, width: float):
+    """The hub, shorter than the tape is wide, so that the coil's spiral edge shows end-on."""
     import pyvista
 
     return pyvista.Cylinder(
-        center=axis_point, direction=(0, 1, 0), radius=radius, height=1.3 * width, resolution=120
+        center=axis_point, direction=(0, 1, 0), radius=radius, height=0.6 * width, resolution=120
     )
 
 
@@ -141,11 +142,6 @@ def _frame_camera(plotter, bounds, zoom: float = 1.0) -> None:
     plotter.camera.position = centre + np.array([0.15, -1.0, 0.25]) * 2.2 * size
     plotter.camera.up = (0.0, 0.0, 1.0)
     plotter.camera.zoom(zoom)
-
-
-def _union_bounds(grids):
-    b = np.array([g.bounds for g in grids])
-    return (b[:, 0].min(), b[:, 1].max(), b[:, 2].min(), b[:, 3].max(), b[:, 4].min(), b[:, 5].max())
 
 
 def render_snapshots(
@@ -189,7 +185,8 @@ def animate_snapshots(
     sequences: list[tuple[list[Path], Path, str]], path: str | Path, config, axis_point, fps: int = 8
 ) -> Path:
     """A GIF of every snapshot in order; ``sequences``: (snapshot files, cells file, label) per
-    phase. Each phase keeps one camera that frames all of its snapshots."""
+    phase. The view keeps its direction and follows the tape: each frame frames its own
+    surface, so the camera closes in on the coil as it is wound and backs away as it deploys."""
     import pyvista
 
     _ensure_display()
@@ -198,19 +195,20 @@ def animate_snapshots(
     plotter.open_gif(str(path), fps=fps)
     hub = _hub(axis_point, config.hub.radius, config.tape.b)
     for files, cells_file, label in sequences:
-        grids = [snapshot_grid(cells_file, f, config.tape.R) for f in files]
-        if not grids:
-            continue
-        bounds = _union_bounds(grids)
         unit = "rad" if label == "coiling" else "s"
-        for grid in grids:
+        for f in files:
+            grid = snapshot_grid(cells_file, f, config.tape.R)
             plotter.clear()
             plotter.add_mesh(
-                grid, scalars="kappa_long R", cmap="viridis", clim=(0.0, 1.5), show_scalar_bar=False
+                grid,
+                scalars="kappa_long R",
+                cmap="viridis",
+                clim=(0.0, 1.5),
+                scalar_bar_args={"title": "kappa_long R", "color": "black"},
             )
             plotter.add_mesh(hub, color="tan")
             plotter.add_text(f"{label}: {grid.field_data['t'][0]:.4g} {unit}", font_size=12, color="black")
-            _frame_camera(plotter, bounds)
+            _frame_camera(plotter, grid.bounds)
             plotter.write_frame()
     plotter.close()
     return Path(path)

@@ -80,9 +80,7 @@ def renders(directory: Path) -> list[Path]:
         if phase == "coiling":
             last = files[-1]
             title = f"stowed: hub angle {float(np.load(last)['t']):.4g} rad"
-            out.append(
-                render_snapshots([last], cells, figures / "stowed.png", config, axis, [title], zoom=1.3)
-            )
+            out.append(render_snapshots([last], cells, figures / "stowed.png", config, axis, [title]))
     if sequences:
         out.append(animate_snapshots(sequences, figures / "animation.gif", config, axis))
     return out
