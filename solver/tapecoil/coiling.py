@@ -600,8 +600,10 @@ def ploy_measure(model: CoilingModel, coiled=None, xi1=None, xi2=None, k_trans=N
     }
 
 
-def coil_measures(model: CoilingModel) -> dict:
+def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
     """Measured quantities of the coil at the current state against physics.md (collective).
+
+    ``cells``: :func:`coiled_cells` of the current state, if the caller has them already.
 
     Returns a dict of named entries {computed, reference, error, ...}, plus profiles along the
     centre line. The "coiled interior" is the wound material more than one radian from the root
@@ -610,7 +612,6 @@ def coil_measures(model: CoilingModel) -> dict:
     """
     cfg = model.config
     tp, r_hub, h = cfg.tape, model.r_hub, cfg.tape.h
-    comm = model.comm
     m, contact = model.model, model.contact
     angle = model.root.angle
     geometry = model.coil_geometry(angle)
@@ -632,19 +633,10 @@ def coil_measures(model: CoilingModel) -> dict:
     out["strain_energy_total"] = entry(total["strain"], reference_energy, note="includes the ploy region")
 
     # curvatures and stresses at cell midpoints
-    kx, ky = m.curvatures()
+    cells = coiled_cells(model) if cells is None else cells
+    xi1, xi2, psi, k_long, k_trans = (cells[k] for k in ("xi1", "xi2", "psi", "kappa_long", "kappa_trans"))
+    sx, sy = np.abs(cells["sigma_x"]), np.abs(cells["sigma_y"])
     E, nu = tp.E, tp.nu
-    # surface bending stresses (physics.md Sec. 4) from the curvature changes: the parameter
-    # metric is the identity (xi_1 = x, xi_2 = arc length), so k_11 and k_22 are physical. The
-    # membrane strain is left out: with reduced integration its point values are not the
-    # converged field (its energy, reported in the history, is small)
-    k = m.bending_strain
-    c = E / (1 - nu**2) * 0.5 * h
-    stresses = [c * (k[0, 0] + nu * k[1, 1]), c * (k[1, 1] + nu * k[0, 0])]
-    _, cells = _cell_midpoint_values(m, [contact.psi, kx, ky, *stresses])
-    cells = np.vstack(comm.allgather(cells))
-    xi1, xi2, psi, k_long, k_trans = (cells[:, i] for i in range(5))
-    sx, sy = np.abs(cells[:, 5]), np.abs(cells[:, 6])
     turn = np.floor(psi / (2 * math.pi))
     rho = r_hub + h / 2 + h * turn
     interior = (
@@ -710,6 +702,10 @@ def coiled_cells(model: CoilingModel) -> dict[str, np.ndarray]:
     """
     m, tp = model.model, model.config.tape
     kx, ky = m.curvatures()
+    # surface bending stresses (physics.md Sec. 4) from the curvature changes: the parameter
+    # metric is the identity (xi_1 = x, xi_2 = arc length), so k_11 and k_22 are physical. The
+    # membrane strain is left out: with reduced integration its point values are not the
+    # converged field (its energy, reported in the history, is small)
     k = m.bending_strain
     c = tp.E / (1 - tp.nu**2) * 0.5 * tp.h
     stresses = [c * (k[0, 0] + tp.nu * k[1, 1]), c * (k[1, 1] + tp.nu * k[0, 0])]
@@ -720,10 +716,12 @@ def coiled_cells(model: CoilingModel) -> dict[str, np.ndarray]:
     return {name: cells[:, i] for i, name in enumerate(names)}
 
 
-def _coiling_summary(model: CoilingModel, run: CoilingRun, ploy: dict, interrupted, t_start: float) -> dict:
+def _coiling_summary(
+    model: CoilingModel, run: CoilingRun, ploy: dict, interrupted, t_start: float, cells=None
+) -> dict:
     """The coiling phase's summary: measures against the theory and the run's figures."""
     history, res, comm = run.result.history, model.strip.resolution, model.comm
-    measures = coil_measures(model)
+    measures = coil_measures(model, cells)
     if ploy:
         measures["ploy_length_one_turn"] = ploy
     timing = model.solver.timing_per_iteration()
@@ -852,7 +850,7 @@ def run_coiling(
             header=",".join(cells),
             comments="",
         )
-    summary = _coiling_summary(model, run, ploy, interrupted, t_start)
+    summary = _coiling_summary(model, run, ploy, interrupted, t_start, cells)
     results.LOG.info(
         "coiling %s at %.6g rad: %d steps, %d Newton iterations, %.1f s",
         "completed" if run.result.completed else "ended",
