@@ -31,11 +31,6 @@ class Interrupted(Exception):
     def name(self) -> str:
         return signal.Signals(self.signum).name
 
-    @property
-    def exit_status(self) -> int:
-        """The shell's convention for a process ended by a signal: 128 + its number."""
-        return 128 + self.signum
-
 
 class StopSignals:
     """Context manager: while active, the signals of :data:`SIGNALS` request a stop.
