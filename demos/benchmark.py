@@ -42,8 +42,8 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from tapecoil.app.pipeline import exit_status, run
 from tapecoil.config import load_config
-from tapecoil.pipeline import exit_status, run
 
 preset = sys.argv[1] if len(sys.argv) > 1 else "coarse"
 config = load_config()

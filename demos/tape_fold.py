@@ -43,8 +43,8 @@ from mpi4py import MPI
 
 from tapecoil import theory
 from tapecoil.config import MeshConfig, load_config
-from tapecoil.geometry import MeshResolution
-from tapecoil.verification import tape_fold
+from tapecoil.geometry.meshes import MeshResolution
+from tapecoil.verification.cases import tape_fold
 
 preset = sys.argv[1] if len(sys.argv) > 1 else "default"
 config = load_config()
@@ -107,7 +107,7 @@ if rank0:
     fig.tight_layout()
     fig.savefig(out / "moment_rotation.png", dpi=130)
     # the folded tape in 3D, coloured by its longitudinal curvature (times R: -1 in the fold)
-    from tapecoil.render import render_shell
+    from tapecoil.post.render import render_shell
 
     if MPI.COMM_WORLD.size == 1:
         kappa_long, _ = result.model.curvatures()

@@ -30,7 +30,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from tapecoil import theory as th
-from tapecoil.cli import main as tapecoil_cli
+from tapecoil.app.cli import main as tapecoil_cli
 from tapecoil.config import load_config
 
 config = load_config(sys.argv[1] if len(sys.argv) > 1 else None)

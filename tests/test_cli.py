@@ -8,7 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from tapecoil.cli import main
+from tapecoil.app.cli import main
 
 
 def test_theory_json_numbers(capsys):

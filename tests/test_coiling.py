@@ -24,7 +24,7 @@ def short_tape(hub_angle=1.0, L=0.12) -> Config:
 @pytest.fixture(scope="module")
 def coiled_short():
     """A short tape flattened and coiled by 1 rad on one rank (shared by the tests below)."""
-    from tapecoil.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel, CoilingRun
 
     model = CoilingModel(short_tape(), MPI.COMM_SELF)
     run = CoilingRun(model)
@@ -34,8 +34,8 @@ def coiled_short():
 
 
 def test_hub_root_section_flattens_and_turns_onto_the_hub(cfg):
-    from tapecoil.boundary import HubRoot
-    from tapecoil.coiling import CoilingModel
+    from tapecoil.hub.attachment import HubRoot
+    from tapecoil.phases.coiling import CoilingModel
 
     model = CoilingModel(short_tape(), MPI.COMM_SELF)
     root: HubRoot = model.root
@@ -64,7 +64,7 @@ def test_hub_root_section_flattens_and_turns_onto_the_hub(cfg):
 
 
 def test_obstacle_staircase_climbs_one_thickness_per_turn():
-    from tapecoil.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingModel
 
     model = CoilingModel(short_tape(hub_angle=20.0), MPI.COMM_SELF)
     c = model.contact
@@ -77,7 +77,7 @@ def test_obstacle_staircase_climbs_one_thickness_per_turn():
 
 
 def test_winding_angle_is_unwrapped_from_step_to_step():
-    from tapecoil.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingModel
 
     model = CoilingModel(short_tape(), MPI.COMM_SELF)
     c = model.contact
@@ -87,7 +87,7 @@ def test_winding_angle_is_unwrapped_from_step_to_step():
     # turning every point rigidly about the axis by 5 rad in 0.5 rad steps (as the coil does)
     # leaves psi unchanged in the hub frame
     nodes = c.nodes
-    from tapecoil.boundary import rotation_matrix
+    from tapecoil.core.rotation import rotation_matrix
 
     q = model.model.q.x.array
     x0 = nodes.reference
@@ -129,7 +129,7 @@ def test_short_coil_wraps_onto_the_hub(coiled_short, cfg):
 
 
 def test_checkpoint_round_trip(coiled_short, tmp_path):
-    from tapecoil.coiling import read_checkpoint, write_checkpoint
+    from tapecoil.phases.coiling import read_checkpoint, write_checkpoint
 
     model, _ = coiled_short
     res = model.strip.resolution
@@ -159,7 +159,7 @@ def test_bad_coiling_config_is_rejected_before_computing():
 @pytest.mark.parametrize("predictor", ["secant", "shift"])
 def test_two_ranks_coil_as_one(predictor):
     """The same short coiling run distributed over the ranks and on each rank alone."""
-    from tapecoil.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel, CoilingRun
 
     def coil(comm):
         cfg = short_tape(hub_angle=0.5)
@@ -181,7 +181,7 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
     """Coil to 0.5 rad, stop, resume from the checkpoint to 1 rad: as if never stopped."""
     import csv
 
-    from tapecoil.coiling import run_coiling
+    from tapecoil.phases.coiling import run_coiling
 
     half, _ = run_coiling(short_tape(hub_angle=0.5), tmp_path / "half", MPI.COMM_SELF, progress=False)
     assert half["completed"]
@@ -209,7 +209,7 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
 
 def test_along_tape_shift_reproduces_nodes_and_smooth_fields():
     """A whole element's shift returns the nodal values; a smooth field moves to spline accuracy."""
-    from tapecoil.coiling import AlongTape, CoilingModel
+    from tapecoil.phases.coiling import AlongTape, CoilingModel
 
     model = CoilingModel(short_tape(), MPI.COMM_SELF)
     nodes = model.contact.nodes
@@ -240,7 +240,7 @@ def test_along_tape_shift_reproduces_nodes_and_smooth_fields():
 
 
 def test_predictor_choice_follows_the_element_length():
-    from tapecoil.coiling import choose_predictor
+    from tapecoil.phases.coiling import choose_predictor
 
     r_hub = 0.0127
     assert choose_predictor("auto", 0.004, r_hub) == "shift"  # default mesh
@@ -250,7 +250,7 @@ def test_predictor_choice_follows_the_element_length():
 
 def test_shift_and_secant_predictors_reach_the_same_state():
     """The predictor changes the path of Newton, not the equilibrium (a short tape, 1.5 rad)."""
-    from tapecoil.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel, CoilingRun
 
     states = {}
     for predictor in ("shift", "secant"):

@@ -17,8 +17,8 @@ pytestmark = [pytest.mark.slow, pytest.mark.mpi]
 
 @pytest.fixture(scope="module")
 def stowed():
-    from tapecoil.coiling import run_coiling
     from tapecoil.config import load_config
+    from tapecoil.phases.coiling import run_coiling
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset="coarse"))
@@ -72,8 +72,8 @@ def test_ploy_length_is_measured_one_turn_in(stowed):
 
 def test_coiling_tension_against_eq_2_6():
     """Steady coiling tension on hubs r_c/R = 0.5 ... 0.9 (default mesh, 0.12 m pieces)."""
-    from tapecoil.coiling import coiling_tension_study
     from tapecoil.config import load_config
+    from tapecoil.phases.tension_study import coiling_tension_study
 
     study = coiling_tension_study(load_config(), comm=MPI.COMM_WORLD)
     if MPI.COMM_WORLD.rank == 0:

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tapecoil import compat
+from tapecoil.core import compat
 
 
 def _rectangle_mesh(comm, lx=2.0, ly=0.5):

@@ -22,7 +22,7 @@ def short_stowed_config(t_end=0.012, rho_inf=0.5) -> Config:
 
 
 def coil(config, comm):
-    from tapecoil.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel, CoilingRun
 
     model = CoilingModel(config, comm)
     run = CoilingRun(model)
@@ -34,7 +34,7 @@ def coil(config, comm):
 def deploy(coiling, config):
     """Deploy from ``coiling``'s state with ``config``'s deployment settings; the stowed state
     (u, theta and the winding angles) is restored afterwards, so that tests can share it."""
-    from tapecoil.deployment import DeploymentModel, DeploymentRun
+    from tapecoil.phases.deployment import DeploymentModel, DeploymentRun
 
     saved = coiling.model.q.x.array.copy(), coiling.contact.psi.x.array.copy()
     coiling.config = config
@@ -99,7 +99,7 @@ def test_secant_forces_give_the_exact_energy_change(stowed_short):
     import dolfinx
     import ufl
 
-    from tapecoil.verification import _global_scalar
+    from tapecoil.core.dofs import global_scalar
 
     model = stowed_short.model
     contact = stowed_short.contact
@@ -119,9 +119,9 @@ def test_secant_forces_give_the_exact_energy_change(stowed_short):
             step[nodes.u_dofs] = size * rng.standard_normal(nodes.u_dofs.shape)
             step[nodes.theta_dofs] = 100 * size * rng.standard_normal(nodes.theta_dofs.shape)
             q[:] = stowed
-            e0 = _global_scalar(model, energy)
+            e0 = global_scalar(energy, model.mesh.comm)
             q[:] = stowed + step
-            e1 = _global_scalar(model, energy)
+            e1 = global_scalar(energy, model.mesh.comm)
             f = dolfinx.fem.Function(model.W)
             dolfinx.fem.assemble_vector(f.x.array, work)
             f.x.scatter_reverse(dolfinx.la.InsertMode.add)

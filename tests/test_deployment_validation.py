@@ -23,9 +23,9 @@ pytestmark = [pytest.mark.slow, pytest.mark.mpi]
 
 @pytest.fixture(scope="module")
 def deployed():
-    from tapecoil.coiling import run_coiling
     from tapecoil.config import load_config
-    from tapecoil.deployment import run_deployment
+    from tapecoil.phases.coiling import run_coiling
+    from tapecoil.phases.deployment import run_deployment
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset="coarse"))

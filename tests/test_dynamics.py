@@ -1,4 +1,4 @@
-"""Generalized-alpha time integration (tapecoil.dynamics) on single-dof oscillators.
+"""Generalized-alpha time integration (tapecoil.core.timeint) on single-dof oscillators.
 
 Each cell of a DG0 space is an independent oscillator m q'' + k q = 0; the integrator's
 classical properties (Chung and Hulbert 1993) are checked against their closed forms.
@@ -12,8 +12,8 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from tapecoil.dynamics import AlphaParameters, GeneralizedAlpha
-from tapecoil.solvers import SNESSolver
+from tapecoil.core.newton import SNESSolver
+from tapecoil.core.timeint import AlphaParameters, GeneralizedAlpha
 
 
 def test_parameters_from_the_spectral_radius():

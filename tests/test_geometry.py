@@ -9,17 +9,15 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.config import MeshConfig, load_config
-from tapecoil.geometry import (
+from tapecoil.geometry.meshes import (
     FREE_END,
     ROOT,
     SIDE_NEG,
     SIDE_POS,
-    AnnulusGeometry,
     MeshResolution,
-    StripGeometry,
-    build_hub_gmsh,
     create_strip_mesh,
 )
+from tapecoil.geometry.surfaces import AnnulusGeometry, StripGeometry
 
 
 def integrate(mesh, expr, measure):
@@ -98,18 +96,3 @@ def test_annulus():
     pts = np.array([[0.3, 5.0], [6.5, 9.0]])
     fd = (geom.phi0(pts + np.array([[eps], [0.0]])) - geom.phi0(pts - np.array([[eps], [0.0]]))) / (2 * eps)
     assert np.allclose(geom.jacobian(pts)[:, 0], fd, atol=1e-6)
-
-
-def test_hub_surface():
-    import gmsh
-
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        build_hub_gmsh(0.0127, 1e-4, 0.0356, 0.002)
-        _, _, tags = gmsh.model.mesh.getElements(2)
-        assert sum(len(t) for t in tags) > 0
-        area = sum(gmsh.model.occ.getMass(2, t) for t in gmsh.model.getEntitiesForPhysicalGroup(2, 1))
-        assert area == pytest.approx(2 * math.pi * 0.0127 * 1.2 * 0.0356, rel=1e-9)
-    finally:
-        gmsh.finalize()

@@ -5,9 +5,10 @@ import pytest
 from mpi4py import MPI
 
 from tapecoil.config import load_config
-from tapecoil.geometry import MeshResolution, StripGeometry, create_strip_mesh
-from tapecoil.output import NonFiniteStateError, ShellWriter, write_csv
-from tapecoil.shell import NaghdiShell, ShellMaterial
+from tapecoil.core.output import NonFiniteStateError, ShellWriter, write_csv
+from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.models.shell import NaghdiShell, ShellMaterial
 
 
 @pytest.fixture
@@ -48,7 +49,7 @@ def test_render_is_a_picture_of_the_shell(model, tmp_path):
     import numpy as np
     from PIL import Image
 
-    from tapecoil.render import render_shell
+    from tapecoil.post.render import render_shell
 
     path = render_shell(model, tmp_path / "shell.png", scalar=model.curvatures()[1], name="kappa_trans")
     image = np.asarray(Image.open(path).convert("L"), dtype=float)

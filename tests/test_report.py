@@ -12,7 +12,7 @@ from tapecoil.config import config_from_dict
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
     """A short tape coiled by 4 rad (more than half a turn of coiled interior) and released 3 ms."""
-    from tapecoil.pipeline import run
+    from tapecoil.app.pipeline import run
 
     config = config_from_dict(
         {
@@ -79,7 +79,7 @@ def test_report_ties_numbers_and_pictures_together(run_dir):
 
 
 def test_report_command_remakes_the_report(run_dir, capsys):
-    from tapecoil.cli import main
+    from tapecoil.app.cli import main
 
     (run_dir / "report.html").unlink()
     assert main(["report", str(run_dir)]) == 0

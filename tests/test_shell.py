@@ -7,9 +7,10 @@ import pytest
 from mpi4py import MPI
 
 from tapecoil.config import load_config
-from tapecoil.geometry import FREE_END, MeshResolution, StripGeometry, create_strip_mesh
-from tapecoil.shell import NaghdiShell, ShellMaterial, angles_from_director
-from tapecoil.verification import ROLLUP_MESHES, rollup, run_case, semicylinder, slit_plate
+from tapecoil.geometry.meshes import FREE_END, MeshResolution, create_strip_mesh
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.models.shell import NaghdiShell, ShellMaterial, angles_from_director
+from tapecoil.verification.cases import ROLLUP_MESHES, rollup, run_case, semicylinder, slit_plate
 
 
 def assert_passed(result):
@@ -29,7 +30,7 @@ def test_tape_linear_coarse():
 
 
 def test_full_integration_locks_where_psri_does_not():
-    from tapecoil.verification import tape_linear
+    from tapecoil.verification.cases import tape_linear
 
     cfg, res = load_config(), MeshResolution(4, 40)
     full = tape_linear(cfg, res, technology="full").checks[1].computed
@@ -57,7 +58,8 @@ def test_angles_round_trip():
 
 def test_edge_motion_is_rigid():
     """A rotated edge: displacement and director of the reference edge turned together."""
-    from tapecoil.boundary import EdgeMotion, rotation_matrix
+    from tapecoil.core.rotation import rotation_matrix
+    from tapecoil.models.edges import EdgeMotion
 
     cfg = load_config()
     strip = create_strip_mesh(MPI.COMM_WORLD, StripGeometry.from_config(cfg), MeshResolution(4, 10))
@@ -119,7 +121,7 @@ def test_two_ranks_agree_with_one_on_a_nonlinear_case():
 @pytest.mark.slow
 def test_tape_fold_default_mesh():
     """Opposite-sense fold of the benchmark tape: plateau moment, fold radius, flat section, mu."""
-    from tapecoil.verification import tape_fold
+    from tapecoil.verification.cases import tape_fold
 
     result = tape_fold(load_config(), MeshResolution(9, 125))
     assert_passed(result)
@@ -132,7 +134,7 @@ def test_global_director_frame_turns_the_curved_section_through_pi():
     In the local frame the director at 45 degrees on the section would land on the singular
     axis t2 at a turn of pi; the global frame keeps every angle finite and the map exact.
     """
-    from tapecoil.boundary import rotation_matrix
+    from tapecoil.core.rotation import rotation_matrix
 
     cfg = load_config()
     strip = create_strip_mesh(MPI.COMM_WORLD, StripGeometry.from_config(cfg), MeshResolution(8, 4))
@@ -159,7 +161,7 @@ def test_continuation_stops_with_the_last_converged_state():
     from types import SimpleNamespace
 
     from tapecoil.config import SolverConfig
-    from tapecoil.continuation import Continuation, ContinuationError
+    from tapecoil.core.stepping import Continuation, ContinuationError
 
     state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(3)))
     load = {"t": 0.0}

@@ -28,7 +28,7 @@ max_step = 0.1
 def test_the_demo_sweep_file_is_valid():
     from pathlib import Path
 
-    from tapecoil.sweep import load_sweep
+    from tapecoil.app.sweep import load_sweep
 
     sweep = load_sweep(Path(__file__).parents[1] / "demos" / "coiling_tension_sweep.toml")
     cases = sweep.cases()
@@ -37,7 +37,7 @@ def test_the_demo_sweep_file_is_valid():
 
 
 def test_cases_are_every_combination(tmp_path):
-    from tapecoil.sweep import load_sweep
+    from tapecoil.app.sweep import load_sweep
 
     path = tmp_path / "s.toml"
     path.write_text(
@@ -73,7 +73,7 @@ def test_cases_are_every_combination(tmp_path):
     ],
 )
 def test_a_bad_sweep_is_refused_before_anything_runs(tmp_path, text, message):
-    from tapecoil.sweep import load_sweep
+    from tapecoil.app.sweep import load_sweep
 
     path = tmp_path / "bad.toml"
     path.write_text(text)
@@ -84,8 +84,8 @@ def test_a_bad_sweep_is_refused_before_anything_runs(tmp_path, text, message):
 @pytest.mark.mpi
 def test_sweep_cases_on_sub_communicators_match_serial_runs(tmp_path):
     """Two cases on two groups of one rank each: each agrees with the case run alone."""
-    from tapecoil.coiling import TensionStudy, coiling_tension
-    from tapecoil.sweep import case_name, load_sweep, run_sweep
+    from tapecoil.app.sweep import case_name, load_sweep, run_sweep
+    from tapecoil.phases.tension_study import TensionStudy, coiling_tension
 
     comm = MPI.COMM_WORLD
     directory = comm.bcast(str(tmp_path), root=0)

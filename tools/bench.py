@@ -20,8 +20,8 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import MeshConfig, load_config
-from tapecoil.geometry import MeshResolution
-from tapecoil.verification import tape_fold
+from tapecoil.geometry.meshes import MeshResolution
+from tapecoil.verification.cases import tape_fold
 
 parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
@@ -35,8 +35,8 @@ if args.case in ("coil", "deploy"):
     import dataclasses
     from pathlib import Path
 
-    from tapecoil.coiling import run_coiling
-    from tapecoil.deployment import run_deployment
+    from tapecoil.phases.coiling import run_coiling
+    from tapecoil.phases.deployment import run_deployment
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset=args.mesh))

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .config import Config
+from tapecoil.config import Config
 
 # --- material and section ----------------------------------------------------------------
 

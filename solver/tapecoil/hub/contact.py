@@ -42,7 +42,7 @@ import dolfinx
 import numpy as np
 import ufl
 
-from .shell import NaghdiShell, Nodes
+from tapecoil.models.shell import NaghdiShell, Nodes
 
 
 def default_penalty(E: float, h: float, element_length: float) -> float:

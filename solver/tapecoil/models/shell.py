@@ -114,7 +114,7 @@ def director_secant(theta0, theta1, frame):
 class NaghdiShell:
     """The shell's function space, state, kinematics, energies and forms.
 
-    ``strip`` is a :class:`tapecoil.geometry.StripMesh`. The unknown ``q`` holds the
+    ``strip`` is a :class:`tapecoil.geometry.meshes.StripMesh`. The unknown ``q`` holds the
     displacement u (3 components, m) and the director angles theta (2 components, rad).
     """
 

@@ -17,9 +17,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from .config import SolverConfig
+from tapecoil.config import SolverConfig
+from tapecoil.core.dofs import global_norm
 
 
 class ContinuationError(RuntimeError):
@@ -96,8 +95,8 @@ class Continuation:
                     q[:] = relax.previous.x.array
                     c *= 4.0
                     continue
-                change = _global_norm(self.state, q - relax.previous.x.array) / max(
-                    _global_norm(self.state, q), 1e-300
+                change = global_norm(self.state.function_space, q - relax.previous.x.array) / max(
+                    global_norm(self.state.function_space, q), 1e-300
                 )
                 if change < relax.tolerance:
                     relax.coefficient.value = 0.0
@@ -181,9 +180,3 @@ class Continuation:
         return self.history
 
 
-def _global_norm(function, local_values: np.ndarray) -> float:
-    """Euclidean norm over all ranks of the owned part of a dof array of ``function``."""
-    imap = function.function_space.dofmap.index_map
-    n = imap.size_local * function.function_space.dofmap.index_map_bs
-    comm = function.function_space.mesh.comm
-    return math.sqrt(comm.allreduce(float(np.dot(local_values[:n], local_values[:n]))))

@@ -8,7 +8,7 @@ The procedure mirrors the physical one (issue 4):
    snapping at the first rotation.
 2. Coiling: the hub turns (load-stepped hub angle, adaptive steps with cut-back); the root
    turns with it (displacement and director), the tape wraps onto the hub and then onto its own
-   turns (penalty contact, :mod:`tapecoil.contact`), and the free end slides along the guide
+   turns (penalty contact, :mod:`tapecoil.hub.contact`), and the free end slides along the guide
    line tangent to the hub's top (z = 0: displacement across and normal to the line and the end's
    rotations held), pulled by T along +x.
 
@@ -39,24 +39,21 @@ import ufl
 from mpi4py import MPI
 from scipy.interpolate import CubicSpline
 
-from . import checkpoint, theory
-from .boundary import HubRoot, facet_condition, rotation_matrix
-from .checkpoint import state_parts
-from .config import Config
-from .contact import CoilContact, default_penalty
-from .continuation import Continuation, ContinuationError, Relaxation, StepRecord
-from .geometry import (
-    FREE_END,
-    ROOT,
-    MeshResolution,
-    StripGeometry,
-    StripMesh,
-    create_strip_mesh,
-    hub_axis_point,
-)
-from .shell import NaghdiShell, Nodes, ShellMaterial
-from .solvers import SNESSolver
-from .verification import _cell_midpoint_values, _dofs, _global_scalar
+from tapecoil.config import Config
+from tapecoil.core import checkpoint
+from tapecoil.core.checkpoint import state_parts
+from tapecoil.core.dofs import global_scalar, global_size
+from tapecoil.core.newton import SNESSolver
+from tapecoil.core.rotation import rotation_matrix
+from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation, StepRecord
+from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, StripMesh, create_strip_mesh
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.hub.attachment import HubRoot
+from tapecoil.hub.contact import CoilContact, default_penalty
+from tapecoil.hub.frame import hub_axis_point
+from tapecoil.measures.coiling import coil_measures, coiled_cells, ploy_measure
+from tapecoil.models.edges import facet_condition
+from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
 
 # the pull at the free end rises with the flattening; the guide line is the hub's top tangent
 _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
@@ -259,14 +256,14 @@ class CoilingModel:
 
     # -- measures -------------------------------------------------------------------------
     def energies(self) -> dict[str, float]:
-        out = {name: _global_scalar(self.model, form) for name, form in self.forms.items()}
+        out = {name: global_scalar(form, self.model.mesh.comm) for name, form in self.forms.items()}
         out["strain"] = out["membrane"] + out["bending"] + out["shear"]
         out["contact"] = out["contact_hub"] + out["contact_coil"]
         return out
 
     def end_slide(self) -> float:
         """Mean displacement of the free end along the guide (+x) [m]."""
-        return _global_scalar(self.model, self.end_slide_form)
+        return global_scalar(self.end_slide_form, self.model.mesh.comm)
 
     def _edge_dofs(self, tag: int, component: int) -> np.ndarray:
         """Owned W-dofs of displacement component ``component`` on the edge ``tag``."""
@@ -524,7 +521,7 @@ def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict) -> None:
 
     adios4dolfinx (ADIOS2 BP) for the mesh and the functions (and, for the secant predictor,
     the previous converged state); ``meta`` (hub angle, tension, the stepping's restart state)
-    as JSON beside it. Written atomically (:mod:`tapecoil.checkpoint`).
+    as JSON beside it. Written atomically (:mod:`tapecoil.core.checkpoint`).
     """
     functions = {**state_parts(model.model.q, ""), "winding_angle": model.contact.psi}
     previous = model.previous_converged()
@@ -558,164 +555,6 @@ def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tu
     return model, meta
 
 
-def _ramps(psi: np.ndarray, ramp_width: float, margin: float) -> np.ndarray:
-    """True where psi lies in (or within ``margin`` of) a climb over the root step."""
-    phase = np.mod(psi, 2 * math.pi)
-    return (phase >= 2 * math.pi - ramp_width - margin) | (phase <= margin)
-
-
-def ploy_measure(model: CoilingModel, coiled=None, xi1=None, xi2=None, k_trans=None) -> dict:
-    """The ploy (transition) region at the current state against physics.md Sec. 7 (collective).
-
-    Along the cells next to the centre line beyond the tangent point: the length over which the
-    transverse curvature rises from 0.1/R to 0.9/R. None when the free part is too short for
-    the section to recover (near the end of the coiling run). Cell values may be passed in.
-    """
-    tp = model.config.tape
-    if coiled is None:
-        coiled = model.coil_geometry(model.root.angle)["coiled_length"]
-        _, cells = _cell_midpoint_values(model.model, [model.model.curvatures()[1]])
-        cells = np.vstack(model.comm.allgather(cells))
-        xi1, xi2, k_trans = cells[:, 0], cells[:, 1], cells[:, 2]
-    centre = np.abs(xi2) <= np.min(np.abs(xi2)) + 1e-9
-    order = np.argsort(xi1[centre])
-    s_line, kt_line = xi1[centre][order], k_trans[centre][order] * tp.R
-    beyond = s_line > coiled
-    ploy = None
-    if beyond.any():
-        s_b, kt_b = s_line[beyond], kt_line[beyond]
-        high = np.nonzero(kt_b >= 0.9)[0]
-        if len(high):
-            low = np.nonzero(kt_b[: high[0] + 1] <= 0.1)[0]
-            start = s_b[low[-1]] if len(low) else coiled
-            ploy = float(s_b[high[0]] - start)
-    return {
-        "computed": ploy,
-        "hub_angle": model.root.angle,
-        "reference_arc_width": theory.ploy_length(tp.b, tp.R, tp.h),
-        "reference_projected_width": theory.ploy_length(2 * tp.R * math.sin(tp.alpha / 2), tp.R, tp.h),
-        "free_length": tp.L - coiled,
-        "quantity": "centre line, transverse curvature from 0.1/R to 0.9/R",
-        "profile": {"xi1": s_line.tolist(), "kappa_trans_R": kt_line.tolist()},
-    }
-
-
-def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
-    """Measured quantities of the coil at the current state against physics.md (collective).
-
-    ``cells``: :func:`coiled_cells` of the current state, if the caller has them already.
-
-    Returns a dict of named entries {computed, reference, error, ...}, plus profiles along the
-    centre line. The "coiled interior" is the wound material more than one radian from the root
-    and from the tangent point, away from the climbs over the root step, over the inner 60 % of
-    the width (the thesis's comparison region; the free edges carry a boundary layer).
-    """
-    cfg = model.config
-    tp, r_hub, h = cfg.tape, model.r_hub, cfg.tape.h
-    m, contact = model.model, model.contact
-    angle = model.root.angle
-    geometry = model.coil_geometry(angle)
-    coiled = geometry["coiled_length"]
-    out: dict = {"hub_angle": angle, "coiled_length": coiled}
-
-    def entry(computed, reference, **extra):
-        error = abs(computed - reference) / abs(reference) if reference else float("nan")
-        return {"computed": float(computed), "reference": float(reference), "error": float(error), **extra}
-
-    # energy: the coiled part (psi behind the tangent point) against the plate estimate for the
-    # spiral of that length; the whole tape's strain energy includes the ploy region
-    wound = ufl.conditional(ufl.lt(contact.psi, angle), 1.0, 0.0)
-    coiled_energy = sum(_global_scalar(m, f) for f in m.energy_forms(wound))
-    wound_angle = theory.rotation_for_coiled_length(coiled, r_hub, h)
-    reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu)
-    total = model.energies()
-    out["stored_energy_coiled"] = entry(coiled_energy, reference_energy)
-    out["strain_energy_total"] = entry(total["strain"], reference_energy, note="includes the ploy region")
-
-    # curvatures and stresses at cell midpoints
-    cells = coiled_cells(model) if cells is None else cells
-    xi1, xi2, psi, k_long, k_trans = (cells[k] for k in ("xi1", "xi2", "psi", "kappa_long", "kappa_trans"))
-    sx, sy = np.abs(cells["sigma_x"]), np.abs(cells["sigma_y"])
-    E, nu = tp.E, tp.nu
-    turn = np.floor(psi / (2 * math.pi))
-    rho = r_hub + h / 2 + h * turn
-    interior = (
-        (psi > 1.0)
-        & (psi < angle - 1.0)
-        & ~_ramps(psi, contact.ramp_width, 0.3)
-        & (np.abs(xi2) <= 0.3 * tp.b)
-    )
-    if interior.any():
-        curvature_ratio = np.abs(k_long[interior]) * rho[interior]
-        sx_ref, sy_ref = theory.coil_stresses(rho[interior], tp.R, E, nu, h / 2)
-        sx_ratio, sy_ratio = sx[interior] / sx_ref, sy[interior] / sy_ref
-        out["cells_interior"] = int(interior.sum())
-        out["curvature_longitudinal"] = entry(
-            np.mean(curvature_ratio),
-            1.0,
-            worst=float(curvature_ratio[np.argmax(np.abs(curvature_ratio - 1))]),
-            quantity="|kappa_long| rho (mean over the interior; worst cell)",
-        )
-        out["curvature_transverse"] = {
-            "computed": float(np.max(np.abs(k_trans[interior])) * tp.R),
-            "reference": 0.0,
-            "quantity": "max |kappa_trans| R over the interior (flattened: 0)",
-        }
-        out["stress_x"] = entry(
-            np.mean(sx_ratio),
-            1.0,
-            worst=float(sx_ratio[np.argmax(np.abs(sx_ratio - 1))]),
-            reference_first_turn_Pa=float(theory.coil_stresses(r_hub, tp.R, E, nu, h / 2)[0]),
-        )
-        out["stress_y"] = entry(
-            np.mean(sy_ratio),
-            1.0,
-            worst=float(sy_ratio[np.argmax(np.abs(sy_ratio - 1))]),
-            reference_first_turn_Pa=float(theory.coil_stresses(r_hub, tp.R, E, nu, h / 2)[1]),
-        )
-
-    # coil radius and the separation of successive turns (centre line, half a turn from the root)
-    out["outer_radius"] = entry(geometry["outer_radius"], theory.outer_radius_after_rotation(angle, r_hub, h))
-    line = model.centre_line()
-    probes = [math.pi + 2 * math.pi * n for n in range(int((angle - math.pi) // (2 * math.pi)) + 1)]
-    radii = np.interp(probes, line["psi"], line["radius"]) if probes else np.array([])
-    out["turn_radii"] = [float(r) for r in radii]
-    if len(radii) > 1:
-        gaps = np.diff(radii) / h
-        out["turn_separation"] = entry(
-            np.mean(gaps),
-            1.0,
-            worst=float(gaps[np.argmax(np.abs(gaps - 1))]),
-            quantity="radial step between turns / h",
-        )
-    out["first_turn_radius"] = entry(radii[0], r_hub + h / 2) if len(radii) else None
-
-    out["ploy_length"] = ploy_measure(model, coiled, xi1, xi2, k_trans)
-    return out
-
-
-def coiled_cells(model: CoilingModel) -> dict[str, np.ndarray]:
-    """Cell-midpoint values of the current state for the pictures (collective, every rank).
-
-    Columns: xi_1, xi_2 [m], winding angle [rad], longitudinal and transverse curvature [1/m],
-    surface bending stresses sigma_x, sigma_y [Pa] (signed; see :func:`coil_measures`).
-    """
-    m, tp = model.model, model.config.tape
-    kx, ky = m.curvatures()
-    # surface bending stresses (physics.md Sec. 4) from the curvature changes: the parameter
-    # metric is the identity (xi_1 = x, xi_2 = arc length), so k_11 and k_22 are physical. The
-    # membrane strain is left out: with reduced integration its point values are not the
-    # converged field (its energy, reported in the history, is small)
-    k = m.bending_strain
-    c = tp.E / (1 - tp.nu**2) * 0.5 * tp.h
-    stresses = [c * (k[0, 0] + tp.nu * k[1, 1]), c * (k[1, 1] + tp.nu * k[0, 0])]
-    _, cells = _cell_midpoint_values(m, [model.contact.psi, kx, ky, *stresses])
-    cells = np.vstack(model.comm.allgather(cells))
-    cells = cells[np.lexsort((cells[:, 1], cells[:, 0]))]
-    names = ("xi1", "xi2", "psi", "kappa_long", "kappa_trans", "sigma_x", "sigma_y")
-    return {name: cells[:, i] for i, name in enumerate(names)}
-
-
 def _coiling_summary(
     model: CoilingModel, run: CoilingRun, ploy: dict, interrupted, t_start: float, cells=None
 ) -> dict:
@@ -734,7 +573,7 @@ def _coiling_summary(
         "measures": measures,
         "run": {
             "ranks": comm.size,
-            "dofs": _dofs(model.model),
+            "dofs": global_size(model.model.W),
             "mesh": f"{res.along} x {res.across}",
             "predictor": model.predictor,
             "penalty": model.penalty,
@@ -765,15 +604,15 @@ def run_coiling(
     snapshots/ (every ``output.vtx_every`` steps and the last state), coiled_cells.csv (the
     final state at the cell midpoints) and stowed/ (the checkpoint: the latest converged state,
     every ``output.checkpoint_every`` steps and at the end, completed or not). The caller writes
-    the configuration and summary.json (:mod:`tapecoil.results`).
+    the configuration and summary.json (:mod:`tapecoil.app.results`).
     ``resume``: a checkpoint directory to continue from (its hub angle, history and step size:
-    the run goes on as if it had never stopped). ``stop``: :class:`~tapecoil.interrupt.StopSignals`;
+    the run goes on as if it had never stopped). ``stop``: :class:`~tapecoil.core.interrupt.StopSignals`;
     on a signal the run ends after the current step, writes everything and reports
     ``interrupted`` in the summary.
     """
-    from . import results
-    from .interrupt import Interrupted
-    from .output import write_csv
+    from tapecoil.app import results
+    from tapecoil.core.interrupt import Interrupted
+    from tapecoil.core.output import write_csv
 
     directory = Path(directory)
     t_start = time.perf_counter()
@@ -795,7 +634,7 @@ def run_coiling(
             "coiling: mesh %d x %d, %d dofs on %d rank(s), predictor %s, to %g rad",
             res.along,
             res.across,
-            _dofs(model.model),
+            global_size(model.model.W),
             comm.size,
             model.predictor,
             target,
@@ -862,89 +701,3 @@ def run_coiling(
     return summary, model
 
 
-@dataclass(frozen=True)
-class TensionStudy:
-    """How the steady coiling tension is measured (see :func:`coiling_tension`).
-
-    Attributes:
-        length: length of the piece of tape coiled [m].
-        hub_angle: hub rotation [rad] (under a turn).
-        window: hub angles [rad] over which the tension is averaged (the steady phase).
-        excess: pull above Eq. 2.6 [N], enough to keep the piece on the hub.
-        preset: mesh preset.
-        max_step: largest hub-angle step [rad]: a third of the node-passing period of the
-            default mesh, so that the samples resolve the oscillation.
-    """
-
-    length: float = 0.12
-    hub_angle: float = 3.0
-    window: tuple[float, float] = (1.0, 3.0)
-    excess: float = 0.6
-    preset: str = "default"
-    max_step: float = 0.05
-
-
-def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | None = None) -> dict:
-    """The steady coiling tension of the configured tape on the configured hub, against Eq. 2.6.
-
-    A ``study.length`` piece of the tape is flattened and coiled by ``study.hub_angle`` with the
-    pull T = Eq. 2.6 + ``study.excess``. The coiling tension T - N (N: the axial force carried
-    into the root, see :meth:`CoilingModel.edge_forces`) oscillates as nodes pass the lift-off
-    point; its mean over the hub angles in ``study.window`` is the measured value. The contact
-    bracket is the plain one: the smoothed bracket (``contact.smoothing``) holds the tape a few
-    smoothing widths off the coil, which lowers the measured tension by about 0.03 N (0.185 N
-    against 0.218 N at r_c/R = 0.9 with the default h/20; 0.2186 N with h/200 and 0.2190 N with
-    the plain bracket). Eq. 2.9 (tension-dominated coiling) is reported beside it.
-    """
-    study = study or TensionStudy()
-    tp, r_c = config.tape, config.hub.radius
-    reference = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, r_c)
-    case = dataclasses.replace(
-        config,
-        tape=dataclasses.replace(tp, L=study.length),
-        coiling=dataclasses.replace(
-            config.coiling, hub_angle=study.hub_angle, tension=reference + study.excess
-        ),
-        mesh=dataclasses.replace(config.mesh, preset=study.preset),
-        contact=dataclasses.replace(config.contact, smoothing=0.0),
-    )
-    t0 = time.perf_counter()
-    model = CoilingModel(case, comm)
-    run = CoilingRun(model, max_step=study.max_step)
-    run.flatten()
-    run.coil(study.hub_angle)
-    lo, hi = study.window
-    rows = [r for r in run.result.history if r["phase"] == "coil" and lo <= r["hub_angle"] <= hi]
-    values = np.array([r["coiling_tension"] for r in rows])
-    measured = float(values.mean())
-    model.solver.destroy()
-    return {
-        "ratio": r_c / tp.R,
-        "hub_radius": r_c,
-        "pull": reference + study.excess,
-        "computed": measured,
-        "reference": reference,
-        "error": abs(measured - reference) / reference,
-        "tension_dominated_eq_2_9": theory.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, r_c),
-        "spread": float(values.std()),
-        "samples": len(values),
-        "max_penetration": max(r["max_penetration"] for r in run.result.history),
-        "history": run.result.history,
-        "wall_time": time.perf_counter() - t0,
-    }
-
-
-def coiling_tension_study(
-    config: Config,
-    ratios=(0.5, 0.6, 0.7, 0.8, 0.9),
-    comm=MPI.COMM_WORLD,
-    study: TensionStudy | None = None,
-) -> list[dict]:
-    """:func:`coiling_tension` on hubs of radius r_c = ratio * R (physics.md Sec. 5)."""
-    out = []
-    for ratio in ratios:
-        case = dataclasses.replace(config, hub=dataclasses.replace(config.hub, radius=ratio * config.tape.R))
-        result = coiling_tension(case, comm, study)
-        result.pop("history")
-        out.append(result)
-    return out

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from .config import Config, to_toml
+from tapecoil.config import Config, to_toml
 
 LOG = logging.getLogger("tapecoil")
 
@@ -128,7 +128,7 @@ class PhaseOutput:
         progress=True,
         restart=None,
     ):
-        from .output import ShellWriter
+        from tapecoil.core.output import ShellWriter
 
         self.phase, self.comm, self.unit = phase, comm, unit
         self.output = config.output
@@ -230,7 +230,7 @@ def write_summary(directory: str | Path, summary: dict, comm) -> None:
 
 def run_summary(phases: dict, started: float, comm=MPI.COMM_WORLD) -> dict:
     """The directory's summary from the phases' summaries ("coiling", "deployment")."""
-    from . import __version__
+    from tapecoil import __version__
 
     rows = []
     if "coiling" in phases:

@@ -18,8 +18,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from . import theory
-from .config import load_config
+from tapecoil import theory
+from tapecoil.config import load_config
 
 
 def read_history(path: Path) -> dict[str, np.ndarray] | None:
@@ -205,7 +205,7 @@ def deployment_lambda(directory: Path) -> Path | None:
     h = read_history(directory / "deployment_history.csv")
     if h is None:
         return None
-    from .deployment import deployment_reference
+    from tapecoil.measures.deployment import deployment_reference
 
     config, summary, figures = _setup(directory)
     tp, r_hub = config.tape, config.hub.radius

@@ -11,8 +11,8 @@ reference area is rho h |u'|^2 / 2 + rho h^3 / 24 |d'|^2; its Euler-Lagrange ter
 direction (du, dtheta) is rho h u''.du + rho h^3/12 d''.(Dd dtheta), with
 d'' = Dd theta'' + D^2d[theta', theta'] (the centripetal part of the rotary inertia). Both are
 written with UFL's automatic differentiation of d(theta). Time stepping is generalized-alpha
-(:mod:`tapecoil.dynamics`) with adaptive steps and the cut-back logic of the load stepping
-(:class:`tapecoil.continuation.Continuation`).
+(:mod:`tapecoil.core.timeint`) with adaptive steps and the cut-back logic of the load stepping
+(:class:`tapecoil.core.stepping.Continuation`).
 
 The deployed fraction lambda is measured from the geometry (see :meth:`DeploymentModel.lift_off`).
 """
@@ -20,7 +20,6 @@ The deployed fraction lambda is measured from the geometry (see :meth:`Deploymen
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -33,16 +32,17 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import checkpoint, compat, theory
-from .checkpoint import state_parts
-from .coiling import CoilingModel
-from .config import Config
-from .continuation import Continuation, ContinuationError, StepRecord
-from .dynamics import GeneralizedAlpha
-from .geometry import FREE_END
-from .shell import director_from_angles
-from .solvers import PointForce, SNESSolver
-from .verification import _global_scalar
+from tapecoil.config import Config
+from tapecoil.core import checkpoint, compat
+from tapecoil.core.checkpoint import state_parts
+from tapecoil.core.dofs import global_scalar
+from tapecoil.core.newton import PointForce, SNESSolver
+from tapecoil.core.stepping import Continuation, ContinuationError, StepRecord
+from tapecoil.core.timeint import GeneralizedAlpha
+from tapecoil.geometry.meshes import FREE_END
+from tapecoil.measures.deployment import deployment_measures
+from tapecoil.models.shell import director_from_angles
+from tapecoil.phases.coiling import CoilingModel
 
 
 def director_rates(model, theta, theta_dot, theta_ddot=None):
@@ -339,12 +339,12 @@ class DeploymentModel:
     # -- measures -------------------------------------------------------------------------------
     def energies(self) -> dict[str, float]:
         out = self.coiling.energies()
-        out["kinetic"] = _global_scalar(self.model, self.kinetic_form)
+        out["kinetic"] = global_scalar(self.kinetic_form, self.model.mesh.comm)
         return out
 
     def tip(self) -> np.ndarray:
         """Mean position of the free end [m] (3,)."""
-        return np.array([_global_scalar(self.model, f) for f in self._tip_forms])
+        return np.array([global_scalar(f, self.model.mesh.comm) for f in self._tip_forms])
 
     def lift_off(self) -> dict[str, float]:
         """The coiled length and the deployed fraction lambda (collective).
@@ -493,7 +493,7 @@ class DeploymentRun:
     def run(self) -> DeploymentResult:
         """Step from release (or the restored time) until lambda_end, t_end or a failure.
 
-        :class:`~tapecoil.interrupt.Interrupted` (a stop signal) propagates, the state being
+        :class:`~tapecoil.core.interrupt.Interrupted` (a stop signal) propagates, the state being
         the last converged one.
         """
         m = self.m
@@ -567,86 +567,6 @@ class DeploymentRun:
         return self.result
 
 
-def _crossing_time(history: list[dict], lam: float) -> float | None:
-    """First time at which lambda reaches ``lam`` (linear between rows), None if never."""
-    for before, after in itertools.pairwise(history):
-        if before["lambda"] < lam <= after["lambda"]:
-            w = (lam - before["lambda"]) / (after["lambda"] - before["lambda"])
-            return before["time"] + w * (after["time"] - before["time"])
-    return None
-
-
-def deployment_reference(config, lam0: float, energy: str = "mu") -> theory.DeploymentSolution:
-    """The modified ODE of physics.md Sec. 6 from lambda0: Eq. 2.24 with r(lambda) of Eq. 4.4.
-
-    ``energy`` is the strain energy per unit area released by unspooling: "mu" is Seffen's
-    D (1 + nu) / R^2 (physics.md; exact for a coil of radius R), "plate" the plate estimate
-    w(r) of physics.md Sec. 3 at the coil radius r(lambda), which the benchmark coil (r about
-    13 mm < R = 15.1 mm) actually stores: 79 to 82 J/m^2 against mu = 67.9 J/m^2.
-    """
-    tp, r_hub = config.tape, config.hub.radius
-    if energy not in ("mu", "plate"):
-        raise ValueError(f"energy must be 'mu' or 'plate', got {energy!r}")
-
-    def rate(lam):
-        r = float(theory.coil_radius_during_deployment(lam, r_hub, tp.h, tp.L))
-        density = tp.mu if energy == "mu" else float(theory.energy_density(r, tp.R, tp.D, tp.nu))
-        return theory.seffen_rate(density, r, tp.R, tp.alpha, tp.rho_l, tp.L)
-
-    return theory.solve_deployment_ode(rate, lam0)
-
-
-def deployment_measures(config, history: list[dict]) -> dict:
-    """Deployment against the theory: times to lambda = 0.9 and to the end, energy balance."""
-    lam0 = history[0]["lambda"]
-    ode = deployment_reference(config, lam0)
-    tp, r_hub = config.tape, config.hub.radius
-    k_hub = theory.seffen_rate(tp.mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
-    stowed = history[0]["strain_energy"] + history[0]["contact_energy"]
-    dissipated = np.array([r["dissipated_energy"] for r in history])
-
-    def entry(computed, reference, **extra):
-        if computed is None:
-            return {"computed": None, "reference": float(reference), "error": None, **extra}
-        error = abs(computed - reference) / abs(reference)
-        return {"computed": float(computed), "reference": float(reference), "error": float(error), **extra}
-
-    t90 = _crossing_time(history, 0.9)
-    lam_end = config.deployment.lambda_end
-    t_end = _crossing_time(history, lam_end)
-    plate = deployment_reference(config, lam0, energy="plate")
-    released = history[0]["strain_energy"] - min(r["strain_energy"] for r in history)
-    unspooled = (max(r["lambda"] for r in history) - lam0) * tp.L
-    return {
-        "lambda0": lam0,
-        "time_to_0.9": entry(
-            t90, ode.t90, source="modified ODE (Eq. 2.24 with r(lambda), Eq. 4.4) from lambda0"
-        ),
-        "time_to_0.9_plate_energy": entry(
-            t90, plate.t90, source="the same ODE releasing the plate energy w(r) instead of mu"
-        ),
-        "released_energy_per_area": {
-            "computed": released / (unspooled * tp.b) if unspooled > 0 else None,
-            "mu": tp.mu,
-            "plate_at_coil_radius": float(theory.energy_density(config.hub.radius, tp.R, tp.D, tp.nu)),
-        },
-        "time_to_end": entry(
-            t_end, ode.time_to(lam_end), lam=lam_end, source="modified ODE from lambda0 (end effects)"
-        ),
-        "time_to_0.9_eq_2_20": {
-            "reference": theory.deployment_time(k_hub, 0.9),
-            "source": "Eq. 2.20, r = r_hub, lambda0 = 0",
-        },
-        "energy": {
-            "stowed": stowed,
-            "largest_dissipated_fraction": float(np.max(np.abs(dissipated)) / stowed),
-            "final_dissipated_fraction": float(dissipated[-1] / stowed),
-            "largest_growth_fraction": float(max(-dissipated.min(), 0.0) / stowed),
-            "final_kinetic_fraction": history[-1]["kinetic_energy"] / stowed,
-        },
-    }
-
-
 def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: dict) -> None:
     """The deployment's restart state: the shell state and winding angles (as a coiling
     checkpoint, so that ``tapecoil deploy`` can start from it too), velocity, acceleration, the
@@ -666,7 +586,7 @@ def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: 
 
 def read_deployment_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD):
     """A :class:`DeploymentModel` in the state of :func:`write_deployment_checkpoint`, and the meta."""
-    from .coiling import read_checkpoint
+    from tapecoil.phases.coiling import read_checkpoint
 
     coiling, meta = read_checkpoint(path, config, comm)
     model = DeploymentModel(coiling)
@@ -726,12 +646,12 @@ def run_deployment(
     ``directory`` receives deployment_history.csv (a row per step), deployment.bp and snapshots/
     (every ``output.vtx_every`` steps and the last state) and deployed/ (the checkpoint: the
     latest converged state, every ``output.checkpoint_every`` steps and at the end). ``stop``: as
-    in :func:`tapecoil.coiling.run_coiling`.
+    in :func:`tapecoil.phases.coiling.run_coiling`.
     """
-    from . import results
-    from .coiling import read_checkpoint
-    from .interrupt import Interrupted
-    from .output import write_csv
+    from tapecoil.app import results
+    from tapecoil.core.interrupt import Interrupted
+    from tapecoil.core.output import write_csv
+    from tapecoil.phases.coiling import read_checkpoint
 
     directory = Path(directory)
     t_start = time.perf_counter()

@@ -17,12 +17,14 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import theory
-from .boundary import EdgeMotion, clamp, facet_condition
-from .config import Config
-from .geometry import FREE_END, ROOT, MeshResolution, StripGeometry, create_strip_mesh
-from .shell import NaghdiShell, ShellMaterial
-from .solvers import SNESSolver
+from tapecoil import theory
+from tapecoil.config import Config
+from tapecoil.core.dofs import cell_midpoint_values, global_scalar, global_size
+from tapecoil.core.newton import SNESSolver
+from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, create_strip_mesh
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.models.edges import EdgeMotion, clamp, facet_condition
+from tapecoil.models.shell import NaghdiShell, ShellMaterial
 
 
 @dataclass
@@ -60,20 +62,14 @@ class CaseResult:
         return all(c.passed for c in self.checks)
 
 
-def _global_scalar(model: NaghdiShell, form) -> float:
-    """A scalar form (UFL or compiled) assembled and summed over all ranks (collective)."""
-    compiled = form if isinstance(form, dolfinx.fem.Form) else dolfinx.fem.form(form)
-    return model.mesh.comm.allreduce(dolfinx.fem.assemble_scalar(compiled), op=MPI.SUM)
-
-
 def _edge_integral(model: NaghdiShell, integrand, tag: int) -> float:
-    return _global_scalar(model, integrand * model.ds(tag))
+    return global_scalar(integrand * model.ds(tag), model.mesh.comm)
 
 
 def energies(model: NaghdiShell) -> dict[str, float]:
     """Membrane, bending and shear energies [J] at the current state (the solve's quadrature)."""
     names = ("membrane", "bending", "shear")
-    out = {name: _global_scalar(model, getattr(model, f"energy_{name}")) for name in names}
+    out = {name: global_scalar(getattr(model, f"energy_{name}"), model.mesh.comm) for name in names}
     out["total"] = out["membrane"] + out["bending"] + out["shear"]
     return out
 
@@ -91,7 +87,7 @@ def quadratic_energies(model: NaghdiShell) -> dict[str, float]:
         for name in ("membrane", "bending", "shear"):
             form = getattr(model, f"energy_{name}")
             second = ufl.derivative(ufl.derivative(form, model.q, direction), model.q, direction)
-            out[name] = 0.5 * _global_scalar(model, second)
+            out[name] = 0.5 * global_scalar(second, model.mesh.comm)
     finally:
         model.q.x.array[:] = direction.x.array
     out["total"] = out["membrane"] + out["bending"] + out["shear"]
@@ -149,7 +145,7 @@ def tape_linear(
         {
             "technology": technology,
             "mesh": f"{resolution.along} x {resolution.across}",
-            "dofs": _dofs(model),
+            "dofs": global_size(model.W),
             "linear_solve": result.reason_name,
             "converged": result.converged,
             "end_rotation": phi,
@@ -187,8 +183,8 @@ def rollup(
     turn: the tip (centre of the free end) within 1 % of L of the exact circle, i.e. back at
     the root. Also checked: the tip on the exact circle at half turns.
     """
-    from .config import SolverConfig
-    from .continuation import Continuation
+    from tapecoil.config import SolverConfig
+    from tapecoil.core.stepping import Continuation
 
     L, b, h, E = 12.0, 1.0, 0.1, 1.2e6
     res = resolution or ROLLUP_MESHES["default"]
@@ -229,7 +225,7 @@ def rollup(
         checks,
         {
             "mesh": f"{res.along} x {res.across}",
-            "dofs": _dofs(model),
+            "dofs": global_size(model.W),
             "steps": len(run),
             "newton_iterations": [s.iterations for s in run],
             "tip": [[theta, *tip.tolist()] for theta, tip, _ in tips],
@@ -282,7 +278,7 @@ CASES = ("stress-free", "tape-linear", "rollup", "semicylinder", "slit-plate", "
 
 def run_case(name: str, config: Config, preset: str, comm=MPI.COMM_WORLD) -> CaseResult:
     """Run the verification case ``name`` on the mesh preset ``preset`` (collective)."""
-    from .config import MeshConfig
+    from tapecoil.config import MeshConfig
 
     tape_res = MeshResolution.from_config(MeshConfig(preset=preset), config.tape.L)
     if name == "stress-free":
@@ -314,7 +310,7 @@ SLIT_PLATE_MESHES = {
 
 def _solve_to_full_load(model, F, bcs, set_load, control, point_forces=()):
     """Newton with adaptive load stepping from 0 to the full load; returns the step history."""
-    from .continuation import Continuation
+    from tapecoil.core.stepping import Continuation
 
     solver = SNESSolver(F, model.jacobian_form(F), model.q, bcs)
     solver.point_forces.extend(point_forces)
@@ -331,9 +327,10 @@ def semicylinder(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, 
     that plane and the rotation about the axis are zero; the point force P at the crown of the
     free end pushes towards the axis. Reference: the deflection there, 1.71505 (Sze's S4R table).
     """
-    from .config import SolverConfig
-    from .geometry import SIDE_NEG, SIDE_POS
-    from .solvers import PointForce, node_value, owned_node_dofs
+    from tapecoil.config import SolverConfig
+    from tapecoil.core.dofs import node_value, owned_node_dofs
+    from tapecoil.core.newton import PointForce
+    from tapecoil.geometry.meshes import SIDE_NEG, SIDE_POS
 
     R, L, h, E, nu, P = 1.016, 3.048, 0.03, 2.0685e7, 0.3, 2000.0
     res = resolution or SEMICYLINDER_MESHES["default"]
@@ -362,7 +359,7 @@ def semicylinder(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, 
         [Check("deflection under the load at P = 2000", W, 1.71505, 0.02)],
         {
             "mesh": f"{res.along} x {res.across}",
-            "dofs": _dofs(model),
+            "dofs": global_size(model.W),
             "steps": len(history),
             "newton_iterations": [s.iterations for s in history],
             "wall_time": wall,
@@ -377,8 +374,8 @@ def slit_plate(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, co
     0.8 per unit length (3.2 in all) normal to the plate. References: the deflections of the
     loaded edge at the inner radius (A) 13.891 and at the outer radius (B) 17.528.
     """
-    from .config import SolverConfig
-    from .geometry import AnnulusGeometry
+    from tapecoil.config import SolverConfig
+    from tapecoil.geometry.surfaces import AnnulusGeometry
 
     Ri, Ro, h, E, p_max = 6.0, 10.0, 0.03, 21e6, 0.8
     res = resolution or SLIT_PLATE_MESHES["default"]
@@ -395,7 +392,7 @@ def slit_plate(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, co
         control or SolverConfig(initial_step=0.05, max_step=0.1),
     )
     wall = time.perf_counter() - t0
-    from .solvers import node_value
+    from tapecoil.core.dofs import node_value
 
     wA = node_value(model.q, (0, 2), (2 * math.pi, Ri))
     wB = node_value(model.q, (0, 2), (2 * math.pi, Ro))
@@ -404,35 +401,12 @@ def slit_plate(resolution: MeshResolution | None = None, comm=MPI.COMM_WORLD, co
         [Check("w_A (inner radius)", wA, 13.891, 0.02), Check("w_B (outer radius)", wB, 17.528, 0.02)],
         {
             "mesh": f"{res.along} x {res.across}",
-            "dofs": _dofs(model),
+            "dofs": global_size(model.W),
             "steps": len(history),
             "newton_iterations": [s.iterations for s in history],
             "wall_time": wall,
         },
     )
-
-
-def _dofs(model: NaghdiShell) -> int:
-    return model.W.dofmap.index_map.size_global * model.W.dofmap.index_map_bs
-
-
-def _cell_midpoint_values(model: NaghdiShell, expressions):
-    """Values of scalar UFL expressions at the midpoints of this rank's cells.
-
-    Returns the DG0 space and an array (n_owned_cells, 2 + len(expressions)): parameter
-    midpoint, then values; row i is the space's local dof i.
-    """
-    from . import compat
-
-    V0 = dolfinx.fem.functionspace(model.mesh, ("DG", 0))
-    n_owned = V0.dofmap.index_map.size_local
-    columns = [V0.tabulate_dof_coordinates()[:n_owned, 0], V0.tabulate_dof_coordinates()[:n_owned, 1]]
-    points = compat.interpolation_points(V0)
-    for expr in expressions:
-        f = dolfinx.fem.Function(V0)
-        f.interpolate(dolfinx.fem.Expression(expr, points))
-        columns.append(f.x.array[:n_owned].copy())
-    return V0, np.column_stack(columns)
 
 
 def _region_energy_density(model: NaghdiShell, V0, mask: np.ndarray) -> float:
@@ -444,8 +418,8 @@ def _region_energy_density(model: NaghdiShell, V0, mask: np.ndarray) -> float:
     chi = dolfinx.fem.Function(V0)
     chi.x.array[: len(mask)] = mask.astype(float)
     chi.x.scatter_forward()
-    energy = sum(_global_scalar(model, f) for f in model.energy_forms(chi))
-    return energy / _global_scalar(model, chi * model.jacobian * model.dx)
+    energy = sum(global_scalar(f, model.mesh.comm) for f in model.energy_forms(chi))
+    return energy / global_scalar(chi * model.jacobian * model.dx, model.mesh.comm)
 
 
 def tape_fold(
@@ -469,8 +443,8 @@ def tape_fold(
     transition zones to stay clear of the ends: on 0.2 m the moment rose again beyond 2.5 rad.
     ``snapshots``: a VTX path to write the shell at every step (ParaView).
     """
-    from .boundary import RigidSection
-    from .continuation import Continuation, Relaxation
+    from tapecoil.core.stepping import Continuation, Relaxation
+    from tapecoil.models.edges import RigidSection
 
     tp = config.tape
     length = length or tp.L
@@ -494,13 +468,13 @@ def tape_fold(
     path = []
     writer = None
     if snapshots is not None:
-        from .output import ShellWriter
+        from tapecoil.core.output import ShellWriter
 
         writer = ShellWriter(model, snapshots)
         writer.write(0.0)
 
     def record(step):
-        energy = _global_scalar(model, energy_form)
+        energy = global_scalar(energy_form, model.mesh.comm)
         path.append((end.angle, energy, step.iterations, step.relaxed))
         if writer is not None:
             writer.write(end.angle)
@@ -542,7 +516,7 @@ def tape_fold(
         plateau = float("nan")
 
     kx, ky = model.curvatures()
-    V0, local = _cell_midpoint_values(model, [kx, ky])
+    V0, local = cell_midpoint_values(model.mesh, [kx, ky])
     cells = np.vstack(comm.allgather(local))
     # opposite sense: the fold's longitudinal curvature is negative (the section's own is +1/R)
     inner = np.abs(cells[:, 1]) <= 0.3 * tp.b  # inner 60 % of the width
@@ -563,7 +537,7 @@ def tape_fold(
         ],
         {
             "mesh": f"{res.along} x {res.across}",
-            "dofs": _dofs(model),
+            "dofs": global_size(model.W),
             "length": length,
             "steps": len(path),
             "snap_angle": float(phi[snap]) if snap is not None else None,

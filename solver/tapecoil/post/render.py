@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import compat
-from .shell import NaghdiShell
+from tapecoil.core import compat
+from tapecoil.models.shell import NaghdiShell
 
 
 def _ensure_display() -> None:
@@ -112,7 +112,7 @@ def render_on_hub(model: NaghdiShell, axis_point, config, path: str | Path, titl
 
 # -- pictures from the gathered snapshots of a run (any number of ranks) --------------------------
 def snapshot_grid(cells_file: str | Path, snapshot_file: str | Path, R: float):
-    """The surface of a snapshot (see :class:`tapecoil.output.ShellWriter`) as a PyVista grid,
+    """The surface of a snapshot (see :class:`tapecoil.core.output.ShellWriter`) as a PyVista grid,
     coloured by the longitudinal curvature times R (its ``t`` in ``grid.field_data``)."""
     import pyvista
 

@@ -10,10 +10,11 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from . import __version__, results
-from .checkpoint import is_checkpoint, read_meta
-from .config import Config
-from .interrupt import StopSignals
+from tapecoil import __version__
+from tapecoil.app import results
+from tapecoil.config import Config
+from tapecoil.core.checkpoint import is_checkpoint, read_meta
+from tapecoil.core.interrupt import StopSignals
 
 
 def run(
@@ -34,12 +35,12 @@ def run(
     deployment starting from the coiling's stowed state. ``resume``: go on from the directory's
     own checkpoints (stowed/, deployed/) as if the run had never stopped; ``coiling_checkpoint``:
     resume the coiling from that checkpoint instead. A stop signal (see
-    :mod:`tapecoil.interrupt`) ends the run after its current step with everything written and
+    :mod:`tapecoil.core.interrupt`) ends the run after its current step with everything written and
     ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
     ``output.report``; rank 0, after the computation).
     """
-    from .coiling import run_coiling
-    from .deployment import run_deployment
+    from tapecoil.phases.coiling import run_coiling
+    from tapecoil.phases.deployment import run_deployment
 
     started = time.perf_counter()
     directory = results.prepare_directory(directory, config, comm)
@@ -91,7 +92,7 @@ def make_report(directory: str | Path, comm=MPI.COMM_WORLD) -> Path | None:
     if comm.rank != 0:
         return None
     try:
-        from .report import write_report
+        from tapecoil.post.report import write_report
 
         path = write_report(directory)
         results.LOG.info("report: %s", path)

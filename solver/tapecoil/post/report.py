@@ -1,7 +1,7 @@
 """The report of a results directory: figures, renders, an animation and report.html.
 
 ``tapecoil report DIR`` (and the end of ``tapecoil run``, ``coil`` and ``deploy``) reads what the
-run wrote and makes, in DIR/figures, the matplotlib figures of :mod:`tapecoil.plots`, PyVista
+run wrote and makes, in DIR/figures, the matplotlib figures of :mod:`tapecoil.post.plots`, PyVista
 renders of the coiling and the deployment from the gathered surface snapshots, an animated GIF of
 the whole run, and DIR/report.html, which ties the validation table, the run's figures and the
 pictures together (a browser is all it needs). Serial (rank 0).
@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import plots
-from .config import load_config
-from .geometry import hub_axis_point
+from tapecoil.config import load_config
+from tapecoil.hub.frame import hub_axis_point
+from tapecoil.post import plots
 
 CAPTIONS = {
     "coiling_energies": "Stored energy against hub angle, with the plate estimate w(r) b for the "
@@ -55,7 +55,7 @@ def _spread(files: list[Path], n: int) -> list[Path]:
 
 def renders(directory: Path) -> list[Path]:
     """PNG renders and the GIF from the snapshots (needs PyVista and an X server or Xvfb)."""
-    from .render import animate_snapshots, render_snapshots
+    from tapecoil.post.render import animate_snapshots, render_snapshots
 
     config = load_config(directory / "config.toml")
     axis = hub_axis_point(config.hub.radius, config.tape.h)

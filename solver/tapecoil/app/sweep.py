@@ -35,7 +35,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from .config import Config, ConfigError, config_from_dict
+from tapecoil.config import Config, ConfigError, config_from_dict
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -120,7 +120,7 @@ def load_sweep(path: str | Path) -> Sweep:
                 f'sweep.parameters."{key}" is neither a configuration key (section.key) nor one of {DERIVED}'
             )
     tension = table.get("tension", {})
-    from .coiling import TensionStudy
+    from tapecoil.phases.tension_study import TensionStudy
 
     fields = {f.name for f in dataclasses.fields(TensionStudy)}
     for key in tension:
@@ -180,9 +180,9 @@ def run_sweep(sweep: Sweep, directory: str | Path, comm=MPI.COMM_WORLD, progress
 def _run_case(sweep: Sweep, index: int, case: dict, directory: Path, comm) -> None:
     config = sweep.config(case)
     if sweep.study == "coiling_tension":
-        from .coiling import TensionStudy, coiling_tension
-        from .output import write_csv
-        from .results import prepare_directory
+        from tapecoil.app.results import prepare_directory
+        from tapecoil.core.output import write_csv
+        from tapecoil.phases.tension_study import TensionStudy, coiling_tension
 
         prepare_directory(directory, config, comm)
         options = {k: tuple(v) if isinstance(v, list) else v for k, v in sweep.tension.items()}
@@ -193,7 +193,7 @@ def _run_case(sweep: Sweep, index: int, case: dict, directory: Path, comm) -> No
                 json.dumps({"case": case, "coiling_tension": result}, indent=2)
             )
         return
-    from .pipeline import run
+    from tapecoil.app.pipeline import run
 
     phases = ("coiling",) if sweep.study == "coil" else ("coiling", "deployment")
     summary = run(config, directory, phases=phases, comm=comm, progress=False, report=False, command="sweep")
@@ -246,7 +246,7 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
 
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     if sweep.study == "coiling_tension":
-        from . import theory
+        from tapecoil import theory
 
         config = sweep.config({})
         tp = config.tape

@@ -11,8 +11,8 @@ import json
 import math
 import sys
 
-from . import __version__
-from .config import ConfigError, load_config
+from tapecoil import __version__
+from tapecoil.config import ConfigError, load_config
 
 
 def _rank() -> int:
@@ -40,7 +40,7 @@ def _display(value: float, unit: str) -> tuple[str, str]:
 
 
 def cmd_theory(args: argparse.Namespace) -> int:
-    from .theory import predictions
+    from tapecoil.theory import predictions
 
     config = load_config(args.config)
     preds = predictions(config)
@@ -74,7 +74,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     import time
 
     config = load_config(args.config)
-    from .verification import CASES, run_case
+    from tapecoil.verification.cases import CASES, run_case
 
     names = CASES if args.case == "all" else (args.case,)
     results = []
@@ -160,7 +160,7 @@ def _print_phase(name: str, phase: dict, directory) -> None:
 
 def _finish(args: argparse.Namespace, summary: dict, directory) -> int:
     """Print the summary (JSON or a table) and return the exit status."""
-    from .pipeline import exit_status
+    from tapecoil.app.pipeline import exit_status
 
     if args.json:
         _echo(json.dumps(summary, indent=2))
@@ -177,7 +177,7 @@ def _resume_path(value, directory, name):
     """--resume [CHECKPOINT]: the checkpoint given, or the results directory's own."""
     from pathlib import Path
 
-    from .checkpoint import is_checkpoint
+    from tapecoil.core.checkpoint import is_checkpoint
 
     if value is None:
         return None
@@ -188,7 +188,7 @@ def _resume_path(value, directory, name):
 
 
 def cmd_coil(args: argparse.Namespace) -> int:
-    from .pipeline import run
+    from tapecoil.app.pipeline import run
 
     config = _with_mesh(load_config(args.config), args.mesh)
     directory = args.out or f"{config.output.directory}/coil"
@@ -209,7 +209,7 @@ def _stowed_config(args: argparse.Namespace):
     """The configuration for a deployment: the file given, else the one beside the checkpoint."""
     from pathlib import Path
 
-    from .checkpoint import is_checkpoint
+    from tapecoil.core.checkpoint import is_checkpoint
 
     stowed = Path(args.stowed)
     if not is_checkpoint(stowed):
@@ -219,7 +219,7 @@ def _stowed_config(args: argparse.Namespace):
 
 
 def cmd_deploy(args: argparse.Namespace) -> int:
-    from .pipeline import run
+    from tapecoil.app.pipeline import run
 
     config = _stowed_config(args)
     directory = args.out or f"{config.output.directory}/deploy"
@@ -240,7 +240,7 @@ def cmd_deploy(args: argparse.Namespace) -> int:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Coil, stow and deploy; with --resume, go on from the directory's checkpoints."""
-    from .pipeline import run
+    from tapecoil.app.pipeline import run
 
     config = _with_mesh(load_config(args.config), args.mesh)
     directory = args.out or f"{config.output.directory}/run"
@@ -259,7 +259,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .sweep import load_sweep, run_sweep
+    from tapecoil.app.sweep import load_sweep, run_sweep
 
     sweep = load_sweep(args.sweep)
     directory = args.out or f"{sweep.config({}).output.directory}/sweep-{Path(args.sweep).stem}"
@@ -286,7 +286,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_report(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .report import write_report
+    from tapecoil.post.report import write_report
 
     directory = Path(args.directory)
     if not (directory / "summary.json").is_file():
@@ -308,7 +308,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=cmd_theory)
 
-    from .verification import CASES
+    from tapecoil.verification.cases import CASES
 
     p = sub.add_parser("verify", help="run the shell verification cases against their references")
     p.add_argument("case", nargs="?", default="all", choices=(*CASES, "all"))
@@ -352,7 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("sweep", help="a parameter study, cases spread over MPI sub-communicators")
-    p.add_argument("sweep", help="sweep file: a configuration with a [sweep] table (see tapecoil.sweep)")
+    p.add_argument("sweep", help="sweep file: a configuration with a [sweep] table (see tapecoil.app.sweep)")
     p.add_argument("--out", help="results directory (default: <output.directory>/sweep-<name>)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=cmd_sweep)
@@ -373,7 +373,7 @@ def _common_run_options(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_config(args: argparse.Namespace) -> int:
-    from .config import to_toml
+    from tapecoil.config import to_toml
 
     _echo(to_toml(load_config(args.config)).rstrip())
     return 0

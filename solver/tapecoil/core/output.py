@@ -17,8 +17,8 @@ import dolfinx
 import dolfinx.plot
 import numpy as np
 
-from . import compat
-from .shell import NaghdiShell
+from tapecoil.core import compat
+from tapecoil.models.shell import NaghdiShell
 
 
 class NonFiniteStateError(RuntimeError):

@@ -17,7 +17,7 @@ import dolfinx.fem.petsc
 import numpy as np
 from petsc4py import PETSc
 
-from . import compat
+from tapecoil.core import compat
 
 DEFAULT_PETSC_OPTIONS = {
     "snes_type": "newtonls",
@@ -48,37 +48,6 @@ class SolveResult:
     def reason_name(self) -> str:
         names = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinstance(v, int)}
         return names.get(self.reason, str(self.reason))
-
-
-def owned_node_dofs(V, sub: tuple[int, ...], point) -> np.ndarray:
-    """Owned dofs of the (sub-)space ``V.sub(i).sub(j)...`` at the node at ``point`` (collective-free).
-
-    Returns indices into the local dof array of V; empty on ranks that do not own the node.
-    """
-    space = V
-    for i in sub:
-        space = space.sub(i)
-    collapsed, _ = space.collapse()
-    p = np.asarray(point, dtype=float)
-
-    def at_point(x):
-        return np.isclose(x[0], p[0], atol=1e-10 * (1 + abs(p[0]))) & np.isclose(
-            x[1], p[1], atol=1e-10 * (1 + abs(p[1]))
-        )
-
-    dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_point)[0]
-    n_owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
-    return dofs[dofs < n_owned]
-
-
-def node_value(q, sub: tuple[int, ...], point) -> float:
-    """Value of a scalar component of q at a mesh node, on every rank (collective)."""
-    dofs = owned_node_dofs(q.function_space, sub, point)
-    comm = q.function_space.mesh.comm
-    count = comm.allreduce(len(dofs))
-    if count != 1:
-        raise ValueError(f"expected one node at {point}, found {count}")
-    return comm.allreduce(float(q.x.array[dofs].sum()))
 
 
 @dataclass

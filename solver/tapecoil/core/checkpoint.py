@@ -15,7 +15,7 @@ from pathlib import Path
 import dolfinx
 import numpy as np
 
-from .geometry import MeshResolution, StripMesh
+from tapecoil.geometry.meshes import MeshResolution, StripMesh
 
 
 def write_checkpoint(path: str | Path, strip: StripMesh, functions: dict, meta: dict, comm) -> None:

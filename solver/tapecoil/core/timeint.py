@@ -29,7 +29,7 @@ motion) with second-order accuracy kept.
 
 Residuals are built from forms written for the state q (:meth:`GeneralizedAlpha.force_average`),
 so a model states its energy once. For rho_inf = 1 the deployment model replaces the averaged
-forces by energy-consistent ones (discrete gradients, see :mod:`tapecoil.deployment`): the
+forces by energy-consistent ones (discrete gradients, see :mod:`tapecoil.phases.deployment`): the
 plain trapezoidal rule is not energy-stable for nonlinear shells.
 """
 

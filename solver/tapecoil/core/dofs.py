@@ -1,0 +1,98 @@
+"""Distributed dof bookkeeping: owned sizes, global sums and norms, node and cell values.
+
+Every function here is collective where it says so and rank-local otherwise; none assumes that
+any rank owns any particular dof.
+"""
+
+from __future__ import annotations
+
+import math
+
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+
+from tapecoil.core import compat
+
+
+def owned_size(V) -> int:
+    """Number of dofs (blocks unrolled) this rank owns in the space V."""
+    return V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+
+
+def global_size(V) -> int:
+    """Number of dofs (blocks unrolled) of the space V over all ranks."""
+    return V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+
+
+def global_scalar(form, comm) -> float:
+    """A scalar form (UFL or compiled) assembled and summed over all ranks of ``comm`` (collective)."""
+    compiled = form if isinstance(form, dolfinx.fem.Form) else dolfinx.fem.form(form)
+    return comm.allreduce(dolfinx.fem.assemble_scalar(compiled), op=MPI.SUM)
+
+
+def global_norm(V, local_values: np.ndarray) -> float:
+    """Euclidean norm over all ranks of the owned part of a local dof array of the space V."""
+    n = owned_size(V)
+    return math.sqrt(V.mesh.comm.allreduce(float(np.dot(local_values[:n], local_values[:n]))))
+
+
+def owned_subspace_dofs(V, sub: tuple[int, ...], dim: int, entities: np.ndarray) -> np.ndarray:
+    """Owned dofs of the subspace ``V.sub(i).sub(j)...`` on mesh entities of dimension ``dim``.
+
+    Indices into the local dof array of V; rank-local.
+    """
+    space = V
+    for i in sub:
+        space = space.sub(i)
+    collapsed, _ = space.collapse()
+    dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), dim, entities)[0]
+    return dofs[dofs < owned_size(V)]
+
+
+def owned_node_dofs(V, sub: tuple[int, ...], point) -> np.ndarray:
+    """Owned dofs of the (sub-)space ``V.sub(i).sub(j)...`` at the node at ``point`` (rank-local).
+
+    Returns indices into the local dof array of V; empty on ranks that do not own the node.
+    """
+    space = V
+    for i in sub:
+        space = space.sub(i)
+    collapsed, _ = space.collapse()
+    p = np.asarray(point, dtype=float)
+
+    def at_point(x):
+        return np.isclose(x[0], p[0], atol=1e-10 * (1 + abs(p[0]))) & np.isclose(
+            x[1], p[1], atol=1e-10 * (1 + abs(p[1]))
+        )
+
+    dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_point)[0]
+    return dofs[dofs < owned_size(V)]
+
+
+def node_value(q, sub: tuple[int, ...], point) -> float:
+    """Value of a scalar component of q at a mesh node, on every rank (collective)."""
+    dofs = owned_node_dofs(q.function_space, sub, point)
+    comm = q.function_space.mesh.comm
+    count = comm.allreduce(len(dofs))
+    if count != 1:
+        raise ValueError(f"expected one node at {point}, found {count}")
+    return comm.allreduce(float(q.x.array[dofs].sum()))
+
+
+def cell_midpoint_values(mesh, expressions):
+    """Values of scalar UFL expressions at the midpoints of this rank's owned cells (rank-local).
+
+    Returns the DG0 space and an array (n_owned_cells, gdim + len(expressions)): the cell
+    midpoint's coordinates (the first two), then the values; row i is the space's local dof i.
+    """
+    V0 = dolfinx.fem.functionspace(mesh, ("DG", 0))
+    n_owned = V0.dofmap.index_map.size_local
+    coordinates = V0.tabulate_dof_coordinates()[:n_owned]
+    columns = [coordinates[:, 0], coordinates[:, 1]]
+    points = compat.interpolation_points(V0)
+    for expr in expressions:
+        f = dolfinx.fem.Function(V0)
+        f.interpolate(dolfinx.fem.Expression(expr, points))
+        columns.append(f.x.array[:n_owned].copy())
+    return V0, np.column_stack(columns)

@@ -1,0 +1,177 @@
+"""What a coiling run is measured by: the coil's energy, curvatures, stresses, radii and ploy region.
+
+Each measure is read from the converged state and compared with the plate theory of the
+physics brief (:mod:`tapecoil.theory`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import ufl
+
+from tapecoil import theory
+from tapecoil.core.dofs import cell_midpoint_values, global_scalar
+
+if TYPE_CHECKING:
+    from tapecoil.phases.coiling import CoilingModel
+
+
+def _ramps(psi: np.ndarray, ramp_width: float, margin: float) -> np.ndarray:
+    """True where psi lies in (or within ``margin`` of) a climb over the root step."""
+    phase = np.mod(psi, 2 * math.pi)
+    return (phase >= 2 * math.pi - ramp_width - margin) | (phase <= margin)
+
+
+def ploy_measure(model: CoilingModel, coiled=None, xi1=None, xi2=None, k_trans=None) -> dict:
+    """The ploy (transition) region at the current state against physics.md Sec. 7 (collective).
+
+    Along the cells next to the centre line beyond the tangent point: the length over which the
+    transverse curvature rises from 0.1/R to 0.9/R. None when the free part is too short for
+    the section to recover (near the end of the coiling run). Cell values may be passed in.
+    """
+    tp = model.config.tape
+    if coiled is None:
+        coiled = model.coil_geometry(model.root.angle)["coiled_length"]
+        _, cells = cell_midpoint_values(model.model.mesh, [model.model.curvatures()[1]])
+        cells = np.vstack(model.comm.allgather(cells))
+        xi1, xi2, k_trans = cells[:, 0], cells[:, 1], cells[:, 2]
+    centre = np.abs(xi2) <= np.min(np.abs(xi2)) + 1e-9
+    order = np.argsort(xi1[centre])
+    s_line, kt_line = xi1[centre][order], k_trans[centre][order] * tp.R
+    beyond = s_line > coiled
+    ploy = None
+    if beyond.any():
+        s_b, kt_b = s_line[beyond], kt_line[beyond]
+        high = np.nonzero(kt_b >= 0.9)[0]
+        if len(high):
+            low = np.nonzero(kt_b[: high[0] + 1] <= 0.1)[0]
+            start = s_b[low[-1]] if len(low) else coiled
+            ploy = float(s_b[high[0]] - start)
+    return {
+        "computed": ploy,
+        "hub_angle": model.root.angle,
+        "reference_arc_width": theory.ploy_length(tp.b, tp.R, tp.h),
+        "reference_projected_width": theory.ploy_length(2 * tp.R * math.sin(tp.alpha / 2), tp.R, tp.h),
+        "free_length": tp.L - coiled,
+        "quantity": "centre line, transverse curvature from 0.1/R to 0.9/R",
+        "profile": {"xi1": s_line.tolist(), "kappa_trans_R": kt_line.tolist()},
+    }
+
+
+def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
+    """Measured quantities of the coil at the current state against physics.md (collective).
+
+    ``cells``: :func:`coiled_cells` of the current state, if the caller has them already.
+
+    Returns a dict of named entries {computed, reference, error, ...}, plus profiles along the
+    centre line. The "coiled interior" is the wound material more than one radian from the root
+    and from the tangent point, away from the climbs over the root step, over the inner 60 % of
+    the width (the thesis's comparison region; the free edges carry a boundary layer).
+    """
+    cfg = model.config
+    tp, r_hub, h = cfg.tape, model.r_hub, cfg.tape.h
+    m, contact = model.model, model.contact
+    angle = model.root.angle
+    geometry = model.coil_geometry(angle)
+    coiled = geometry["coiled_length"]
+    out: dict = {"hub_angle": angle, "coiled_length": coiled}
+
+    def entry(computed, reference, **extra):
+        error = abs(computed - reference) / abs(reference) if reference else float("nan")
+        return {"computed": float(computed), "reference": float(reference), "error": float(error), **extra}
+
+    # energy: the coiled part (psi behind the tangent point) against the plate estimate for the
+    # spiral of that length; the whole tape's strain energy includes the ploy region
+    wound = ufl.conditional(ufl.lt(contact.psi, angle), 1.0, 0.0)
+    coiled_energy = sum(global_scalar(f, m.mesh.comm) for f in m.energy_forms(wound))
+    wound_angle = theory.rotation_for_coiled_length(coiled, r_hub, h)
+    reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu)
+    total = model.energies()
+    out["stored_energy_coiled"] = entry(coiled_energy, reference_energy)
+    out["strain_energy_total"] = entry(total["strain"], reference_energy, note="includes the ploy region")
+
+    # curvatures and stresses at cell midpoints
+    cells = coiled_cells(model) if cells is None else cells
+    xi1, xi2, psi, k_long, k_trans = (cells[k] for k in ("xi1", "xi2", "psi", "kappa_long", "kappa_trans"))
+    sx, sy = np.abs(cells["sigma_x"]), np.abs(cells["sigma_y"])
+    E, nu = tp.E, tp.nu
+    turn = np.floor(psi / (2 * math.pi))
+    rho = r_hub + h / 2 + h * turn
+    interior = (
+        (psi > 1.0)
+        & (psi < angle - 1.0)
+        & ~_ramps(psi, contact.ramp_width, 0.3)
+        & (np.abs(xi2) <= 0.3 * tp.b)
+    )
+    if interior.any():
+        curvature_ratio = np.abs(k_long[interior]) * rho[interior]
+        sx_ref, sy_ref = theory.coil_stresses(rho[interior], tp.R, E, nu, h / 2)
+        sx_ratio, sy_ratio = sx[interior] / sx_ref, sy[interior] / sy_ref
+        out["cells_interior"] = int(interior.sum())
+        out["curvature_longitudinal"] = entry(
+            np.mean(curvature_ratio),
+            1.0,
+            worst=float(curvature_ratio[np.argmax(np.abs(curvature_ratio - 1))]),
+            quantity="|kappa_long| rho (mean over the interior; worst cell)",
+        )
+        out["curvature_transverse"] = {
+            "computed": float(np.max(np.abs(k_trans[interior])) * tp.R),
+            "reference": 0.0,
+            "quantity": "max |kappa_trans| R over the interior (flattened: 0)",
+        }
+        out["stress_x"] = entry(
+            np.mean(sx_ratio),
+            1.0,
+            worst=float(sx_ratio[np.argmax(np.abs(sx_ratio - 1))]),
+            reference_first_turn_Pa=float(theory.coil_stresses(r_hub, tp.R, E, nu, h / 2)[0]),
+        )
+        out["stress_y"] = entry(
+            np.mean(sy_ratio),
+            1.0,
+            worst=float(sy_ratio[np.argmax(np.abs(sy_ratio - 1))]),
+            reference_first_turn_Pa=float(theory.coil_stresses(r_hub, tp.R, E, nu, h / 2)[1]),
+        )
+
+    # coil radius and the separation of successive turns (centre line, half a turn from the root)
+    out["outer_radius"] = entry(geometry["outer_radius"], theory.outer_radius_after_rotation(angle, r_hub, h))
+    line = model.centre_line()
+    probes = [math.pi + 2 * math.pi * n for n in range(int((angle - math.pi) // (2 * math.pi)) + 1)]
+    radii = np.interp(probes, line["psi"], line["radius"]) if probes else np.array([])
+    out["turn_radii"] = [float(r) for r in radii]
+    if len(radii) > 1:
+        gaps = np.diff(radii) / h
+        out["turn_separation"] = entry(
+            np.mean(gaps),
+            1.0,
+            worst=float(gaps[np.argmax(np.abs(gaps - 1))]),
+            quantity="radial step between turns / h",
+        )
+    out["first_turn_radius"] = entry(radii[0], r_hub + h / 2) if len(radii) else None
+
+    out["ploy_length"] = ploy_measure(model, coiled, xi1, xi2, k_trans)
+    return out
+
+
+def coiled_cells(model: CoilingModel) -> dict[str, np.ndarray]:
+    """Cell-midpoint values of the current state for the pictures (collective, every rank).
+
+    Columns: xi_1, xi_2 [m], winding angle [rad], longitudinal and transverse curvature [1/m],
+    surface bending stresses sigma_x, sigma_y [Pa] (signed; see :func:`coil_measures`).
+    """
+    m, tp = model.model, model.config.tape
+    kx, ky = m.curvatures()
+    # surface bending stresses (physics.md Sec. 4) from the curvature changes: the parameter
+    # metric is the identity (xi_1 = x, xi_2 = arc length), so k_11 and k_22 are physical. The
+    # membrane strain is left out: with reduced integration its point values are not the
+    # converged field (its energy, reported in the history, is small)
+    k = m.bending_strain
+    c = tp.E / (1 - tp.nu**2) * 0.5 * tp.h
+    stresses = [c * (k[0, 0] + tp.nu * k[1, 1]), c * (k[1, 1] + tp.nu * k[0, 0])]
+    _, cells = cell_midpoint_values(m.mesh, [model.contact.psi, kx, ky, *stresses])
+    cells = np.vstack(model.comm.allgather(cells))
+    cells = cells[np.lexsort((cells[:, 1], cells[:, 0]))]
+    names = ("xi1", "xi2", "psi", "kappa_long", "kappa_trans", "sigma_x", "sigma_y")
+    return {name: cells[:, i] for i, name in enumerate(names)}
