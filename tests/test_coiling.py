@@ -41,15 +41,15 @@ def test_hub_root_section_flattens_and_turns_onto_the_hub(cfg):
     root: HubRoot = model.root
     s = np.linspace(-cfg.tape.b / 2, cfg.tape.b / 2, 41)
     xi = np.vstack([np.zeros_like(s), s])
-    curved, d0 = root.section(xi, 0.0)
+    curved, d0 = root.section_at(xi, 0.0)
     assert np.allclose(curved, model.strip.geometry.phi0(xi), atol=1e-15)
     assert np.allclose(d0, model.strip.geometry.frame(xi)[2], atol=1e-14)
-    flat, d1 = root.section(xi, 1.0)
+    flat, d1 = root.section_at(xi, 1.0)
     assert np.allclose(flat[1], s) and np.allclose(flat[2], 0.0)
     assert np.allclose(d1, [[0.0], [0.0], [1.0]])
     # the flattened section keeps its length for any f (inextensible)
     for f in (0.3, 0.7):
-        p, _ = root.section(xi, f)
+        p, _ = root.section_at(xi, f)
         assert np.sum(np.linalg.norm(np.diff(p, axis=1), axis=0)) == pytest.approx(cfg.tape.b, rel=1e-3)
     # turned by the hub angle, the flat root's centre line stays on the hub's mid-surface radius
     # and has moved towards -x (the coiling sense)
@@ -264,3 +264,48 @@ def test_shift_and_secant_predictors_reach_the_same_state():
         states[predictor] = run.result.history[-1]
     for key in ("strain_energy", "coiled_length", "end_slide", "outer_radius"):
         assert states["shift"][key] == pytest.approx(states["secant"][key], rel=1e-6), key
+
+
+def _wound_interior(model, lo, hi):
+    """Cell values over the wound material lo < psi < hi [rad], inner 60 % of the width."""
+    from tapecoil.measures.coiling import coiled_cells
+
+    cells = coiled_cells(model)
+    b = model.config.tape.b
+    mask = (cells["psi"] > lo) & (cells["psi"] < hi) & (np.abs(cells["xi2"]) <= 0.3 * b)
+    return {k: v[mask] for k, v in cells.items()}
+
+
+def test_equal_sense_coil_curves_with_its_section_and_flattens_on_the_hub(coiled_short):
+    """Equal sense, one turn: the coil bends the way the section curves, the opposite sense the other.
+
+    Both read at the converged state, from the shell's own curvature fields and, for the turn's
+    radius, from the nodes' positions about the hub axis.
+    """
+    from tapecoil.phases.coiling import CoilingModel, CoilingRun
+
+    cfg = short_tape(hub_angle=2 * math.pi)
+    cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, sense="equal"))
+    model = CoilingModel(cfg, MPI.COMM_SELF)
+    result = CoilingRun(model).run()
+    assert result.completed, result.message
+    tp, r_hub = cfg.tape, cfg.hub.radius
+    assert model.frame.axis_point[2] > 0  # the hub on the concave side, above the tape
+
+    equal = _wound_interior(model, 1.0, 2 * math.pi - 1.0)
+    opposite = _wound_interior(coiled_short[0], 0.2, 0.8)
+    assert len(equal["psi"]) > 0 and len(opposite["psi"]) > 0
+    rho = r_hub + tp.h / 2
+    # the section's transverse curvature is +1/R: equal sense curves the same way
+    assert np.all(equal["kappa_long"] > 0) and np.all(opposite["kappa_long"] < 0)
+    assert np.mean(equal["kappa_long"]) * rho == pytest.approx(1.0, abs=0.1)
+    # the section is flattened on the hub (|kappa_trans| R = 1 on the free tape)
+    assert np.max(np.abs(equal["kappa_trans"])) * tp.R < 0.15
+    # the first turn's mid-surface lies h/2 off the hub, read from the node positions
+    nodes = model.contact.nodes
+    x = nodes.positions(model.model.q.x.array)
+    distance = np.hypot(x[0], x[2] - (r_hub + tp.h / 2))  # the hub axis lies at z = r_hub + h/2
+    psi = model.contact.psi.x.array
+    wound = (psi > 1.0) & (psi < 2 * math.pi - 1.0) & (np.abs(nodes.xi[1]) < 1e-9)
+    assert wound.any()
+    assert np.all(np.abs(distance[wound] - rho) < 0.5 * tp.h)

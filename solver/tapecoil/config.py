@@ -146,6 +146,9 @@ class CoilingConfig:
             steps) or 'auto' (the shift where elements are at most half the hub radius long).
         max_step: largest hub-angle step [rad]; 0 takes the predictor's own (1 rad for the
             shift, 0.3 rad for the secant).
+        sense: 'opposite' (the coil's longitudinal curvature opposite in sense to the section's
+            transverse curvature: the hub lies on the convex side of the section, as a tape
+            measure is wound) or 'equal' (the hub on the concave side) [-].
     """
 
     hub_angle: float = param(36.0, "rad", POSITIVE)
@@ -153,6 +156,7 @@ class CoilingConfig:
     flatten_steps: int = param(4, "-", Range(1, 1000))
     predictor: str = param("auto", "", ("auto", "shift", "secant"))
     max_step: float = param(0.0, "rad", Range(0.0, math.pi))
+    sense: str = param("opposite", "", ("opposite", "equal"))
 
 
 @dataclass

@@ -1,8 +1,9 @@
 """Penalty contact of the tape's inner face with the rigid hub and with the turns beneath it.
 
-The hub is a rigid cylinder (axis along y through ``axis_point``, radius r_hub). A tape wound
-on it is a spiral: the mid-surface of turn n lies at r_hub + h/2 + n h (physics.md Sec. 2), so
-the inner face (mid-surface - h/2 d) of a point on turn n must stay outside r_hub + n h, the
+The hub is a rigid cylinder (axis along y, radius r_hub, placed and turned by a
+:class:`~tapecoil.hub.frame.HubFrame`). A tape wound on it is a spiral: the mid-surface of turn
+n lies at r_hub + h/2 + n h (physics.md Sec. 2), so the inner face (the mid-surface moved h/2
+along the director towards the hub) of a point on turn n must stay outside r_hub + n h, the
 outer face of the turn beneath. Rather than searching for the nearest point of the turn below
 (general self-contact), every point carries its winding angle psi: the angle it has been carried
 round the hub, measured in the hub's rotating frame from the root. psi is updated between load
@@ -42,6 +43,7 @@ import dolfinx
 import numpy as np
 import ufl
 
+from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, Nodes
 
 
@@ -58,24 +60,26 @@ def _smoothstep(x):
 class CoilContact:
     """Contact of the tape's inner face with the hub and the wound turns (penalty, lagged psi).
 
-    ``axis_point`` is a point of the hub axis (along y) [m]; ``max_turns`` bounds the number of
-    turns the staircase holds; ``ramp_width`` [rad] is w of the module docstring.
+    ``frame`` places the hub and gives its radius; ``max_turns`` bounds the number of turns the
+    staircase holds; ``ramp_width`` [rad] is w of the module docstring.
     """
 
     def __init__(
         self,
         model: NaghdiShell,
-        axis_point: np.ndarray,
-        r_hub: float,
+        frame: HubFrame,
         penalty: float,
         max_turns: int,
         ramp_width: float,
         smoothing: float = 0.0,
     ):
         self.model = model
-        self.axis_point = np.asarray(axis_point, dtype=float)
-        self.r_hub = r_hub
+        self.frame = frame
+        self.axis_point = frame.axis_point
+        self.r_hub = r_hub = frame.radius
         self.h = h = model.material.h
+        # the face in contact, as a multiple of the director: -h/2 (opposite) or +h/2 (equal)
+        self.face_offset = 0.5 * h * frame.contact_side
         self.ramp_width = ramp_width
         self.max_turns = max_turns
         self.stiffness = dolfinx.fem.Constant(model.mesh, float(penalty))
@@ -103,7 +107,7 @@ class CoilContact:
 
     def _face(self, phi, d):
         """The inner face's point relative to the hub axis, for a mid-surface point and director."""
-        return phi - 0.5 * self.h * d - ufl.as_vector(self.axis_point)
+        return phi + self.face_offset * d - ufl.as_vector(self.axis_point)
 
     def _bracket(self, gap):
         """The penetration <gap>: max(gap, 0), or its smooth version delta softplus(gap / delta)."""
@@ -143,7 +147,7 @@ class CoilContact:
         secant = (energy(g1) - energy(g0)) / ufl.conditional(ufl.gt(abs(change), eps), change, 1.0)
         slope = ufl.conditional(ufl.gt(abs(change), eps), secant, tangent)
         du = ufl.split(m.dq)[0]
-        dface = du - 0.5 * self.h * director_variation
+        dface = du + self.face_offset * director_variation
         dg = -((f0[0] + f1[0]) * dface[0] + (f0[2] + f1[2]) * dface[2]) / (rho0 + self.radius)
         return slope * dg * m.jacobian * m.dx
 
@@ -154,14 +158,13 @@ class CoilContact:
         return self.r_hub + self.h * np.sum(s * s * (3.0 - 2.0 * s), axis=0)
 
     def polar(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distance from the axis and polar angle (from +x, in the xz-plane) of points (3, n)."""
-        p = points - self.axis_point[:, None]
-        return np.hypot(p[0], p[2]), np.arctan2(p[2], p[0])
+        """Distance from the axis and swept angle (:meth:`HubFrame.polar`) of points (3, n)."""
+        return self.frame.polar(points)
 
     def nodal_penetration(self) -> np.ndarray:
         """Penetration r_obs - r [m] of the inner face at this rank's nodes (negative: a gap)."""
         q = self.model.q.x.array
-        face = self.nodes.positions(q) - 0.5 * self.h * self.nodes.directors(q)
+        face = self.nodes.positions(q) + self.face_offset * self.nodes.directors(q)
         return self.obstacle_radius(self.psi.x.array) - self.polar(face)[0]
 
     def _lab_angles(self) -> np.ndarray:
@@ -170,16 +173,16 @@ class CoilContact:
     def update(self, hub_angle: float) -> None:
         """Winding angles from the current (converged) state at hub angle ``hub_angle`` [rad].
 
-        psi = hub_angle + pi/2 - polar angle: the root sits at polar angle pi/2 + hub_angle,
-        and material behind it in the sense of rotation has been carried round by psi. The
-        branch nearest the previous psi is taken: coiled points hardly move in the hub frame.
+        psi = hub_angle - swept angle: the root sits at the swept angle hub_angle, and material
+        behind it in the sense of rotation has been carried round by psi. The branch nearest the
+        previous psi is taken: coiled points hardly move in the hub frame.
         """
-        raw = hub_angle + 0.5 * math.pi - self._lab_angles()
+        raw = hub_angle - self._lab_angles()
         previous = self.psi.x.array
         self.psi.x.array[:] = previous + (raw - previous + math.pi) % (2 * math.pi) - math.pi
         self.hub_angle = hub_angle
 
     def reset(self) -> None:
         """Winding angles of the reference state (hub angle 0): psi in [0, pi/2) on the flat tape."""
-        self.psi.x.array[:] = 0.5 * math.pi - self._lab_angles()
+        self.psi.x.array[:] = -self._lab_angles()
         self.hub_angle = 0.0

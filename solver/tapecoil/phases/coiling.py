@@ -19,9 +19,10 @@ frame from step to step), or, on meshes too coarse to interpolate along the tape
 extrapolation of the last two converged states. See :meth:`CoilingModel.predict`.
 
 All quantities are SI. Sign conventions: the hub angle is positive in the coiling sense (the root
-moves from the top of the hub towards -x, i.e. a rotation about -y); the longitudinal curvature
-of the coil is negative in the shell's convention (opposite to the section's +1/R) and is reported
-as a magnitude.
+moves from the generator it touches towards -x; :class:`~tapecoil.hub.frame.HubFrame` places and
+turns the hub for either coiling sense); in opposite-sense coiling the longitudinal curvature of
+the coil is negative in the shell's convention (opposite to the section's +1/R), in equal-sense
+coiling positive. The measures report it as a magnitude.
 """
 
 from __future__ import annotations
@@ -44,13 +45,13 @@ from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.core.newton import SNESSolver
-from tapecoil.core.rotation import rotation_matrix
 from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation, StepRecord
 from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, StripMesh, create_strip_mesh
+from tapecoil.geometry.sections import CircularArcSection
 from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact, default_penalty
-from tapecoil.hub.frame import hub_axis_point
+from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.coiling import coil_measures, coiled_cells, ploy_measure
 from tapecoil.models.edges import facet_condition
 from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
@@ -142,8 +143,9 @@ class CoilingModel:
         res = strip.resolution
         self.element_length = tp.L / res.along
         self.model = model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
-        self.axis_point = hub_axis_point(r_hub, tp.h)
-        self.root = HubRoot(model, ROOT, self.axis_point, tp.R)
+        self.frame = HubFrame(r_hub, tp.h, config.coiling.sense)
+        self.axis_point = self.frame.axis_point
+        self.root = HubRoot(model, ROOT, self.frame, CircularArcSection.from_tape(tp))
 
         cc = config.contact
         self.penalty = cc.penalty or cc.penalty_scale * default_penalty(tp.E, tp.h, self.element_length)
@@ -151,7 +153,7 @@ class CoilingModel:
         # the climb over the root end spread over about two elements (at least 0.3 rad)
         ramp = max(2 * self.element_length / r_hub, 0.3)
         smoothing = cc.smoothing * tp.h
-        self.contact = CoilContact(model, self.axis_point, r_hub, self.penalty, max_turns, ramp, smoothing)
+        self.contact = CoilContact(model, self.frame, self.penalty, max_turns, ramp, smoothing)
         self.contact.reset()
 
         free_end = strip.facet_tags.find(FREE_END)
@@ -228,12 +230,11 @@ class CoilingModel:
             if last is not None and angle_from - last[0] > 0:
                 q += (current - last[1]) * (dtheta / (angle_from - last[0]))
         w = _smoothstep(angle_from - c.psi.x.array)[:, None]
-        a = self.axis_point[:, None]
         x = nodes.positions(current)
-        turned = rotation_matrix(np.array([0.0, -1.0, 0.0]), dtheta) @ (x - a) + a - nodes.reference
+        turned = self.frame.turn_points(x, dtheta) - nodes.reference
         q[nodes.u_dofs] = w * turned.T + (1 - w) * q[nodes.u_dofs]
-        # a turn about the width axis changes theta_1 by -dtheta and leaves theta_0 as it is
-        rotated = current[nodes.theta_dofs[:, 1]] - dtheta
+        # a turn about the width axis changes theta_1 alone
+        rotated = current[nodes.theta_dofs[:, 1]] + self.frame.director_angle_change(dtheta)
         q[nodes.theta_dofs[:, 1]] = w[:, 0] * rotated + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 1]]
         if self.predictor == "shift":
             kept = current[nodes.theta_dofs[:, 0]]
@@ -292,14 +293,14 @@ class CoilingModel:
 
         ``tension``: the internal force along +x on the free end, what the pull holds.
         ``root_tension``: the axial force N the tape carries into the root attachment (tension
-        positive), the internal force on the root edge along the tape's direction there, (cos,
-        0, sin) of the hub angle. With frictionless contact, N + M kappa - U is the same all
+        positive), the internal force on the root edge along the tape's direction there, turned
+        with the hub (:meth:`HubFrame.tangent`). With frictionless contact, N + M kappa - U is the same all
         along the tape (the configurational force balance of physics.md Sec. 5), so T - N is the
         coiling tension M kappa - U of the first turn: Eq. 2.6 for a flattened coil.
         """
         f = self.internal_force()
         angle = self.root.angle
-        direction = (math.cos(angle), 0.0, math.sin(angle))
+        direction = self.frame.tangent(angle)
         root = sum(direction[i] * float(f[dofs].sum()) for i, dofs in enumerate(self._root_dofs))
         end, root = self.comm.allreduce(np.array([float(f[self._end_dofs].sum()), root]), op=MPI.SUM)
         return {"tension": float(end), "root_tension": -float(root)}

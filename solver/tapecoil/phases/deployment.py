@@ -367,7 +367,7 @@ class DeploymentModel:
         nodes = c.nodes
         n_owned = nodes.space.dofmap.index_map.size_local
         q = self.model.q.x.array
-        face = nodes.positions(q) - 0.5 * tp.h * nodes.directors(q)
+        face = nodes.positions(q) + c.face_offset * nodes.directors(q)
         obstacle = c.obstacle_radius(c.psi.x.array)
         gap = c.polar(face)[0] - obstacle
         xi = nodes.xi[:, :n_owned]

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from tapecoil.config import load_config
-from tapecoil.hub.frame import hub_axis_point
+from tapecoil.hub.frame import HubFrame
 from tapecoil.post import plots
 
 CAPTIONS = {
@@ -58,7 +58,7 @@ def renders(directory: Path) -> list[Path]:
     from tapecoil.post.render import animate_snapshots, render_snapshots
 
     config = load_config(directory / "config.toml")
-    axis = hub_axis_point(config.hub.radius, config.tape.h)
+    axis = HubFrame(config.hub.radius, config.tape.h, config.coiling.sense).axis_point
     figures = directory / "figures"
     figures.mkdir(exist_ok=True)
     out = []
