@@ -58,7 +58,7 @@ def test_hub_root_section_flattens_and_turns_onto_the_hub(cfg):
     x = u.function_space.tabulate_dof_coordinates()
     centre = np.argmin(np.abs(x[:, 1]) + np.abs(x[:, 0]))
     pos = model.strip.geometry.phi0(x[centre, :2, None])[:, 0] + u.x.array.reshape(-1, 3)[centre]
-    rel = pos - model.axis_point
+    rel = pos - model.frame.axis_point
     assert math.hypot(rel[0], rel[2]) == pytest.approx(cfg.hub.radius + cfg.tape.h / 2, rel=1e-12)
     assert math.atan2(rel[2], rel[0]) == pytest.approx(math.pi / 2 + 0.8, rel=1e-12)
 
@@ -91,7 +91,7 @@ def test_winding_angle_is_unwrapped_from_step_to_step():
 
     q = model.model.q.x.array
     x0 = nodes.reference
-    a = model.axis_point[:, None]
+    a = model.frame.axis_point[:, None]
     for angle in np.arange(0.5, 5.01, 0.5):
         x = rotation_matrix(np.array([0.0, -1.0, 0.0]), angle) @ (x0 - a) + a
         q[nodes.u_dofs] = (x - x0).T
@@ -142,7 +142,7 @@ def test_checkpoint_round_trip(coiled_short, tmp_path):
     write_checkpoint(model, tmp_path / "stowed", meta)
     restored, meta2 = read_checkpoint(tmp_path / "stowed", model.config, MPI.COMM_SELF)
     assert meta2["hub_angle"] == pytest.approx(1.0)
-    e0, e1 = model.energies(), restored.energies()
+    e0, e1 = model.tape.energies(), restored.tape.energies()
     for key in ("membrane", "bending", "shear", "contact"):
         assert e1[key] == pytest.approx(e0[key], rel=1e-10, abs=1e-14)
     assert np.allclose(np.sort(restored.contact.psi.x.array), np.sort(model.contact.psi.x.array))
@@ -270,7 +270,7 @@ def _wound_interior(model, lo, hi):
     """Cell values over the wound material lo < psi < hi [rad], inner 60 % of the width."""
     from tapecoil.measures.coiling import coiled_cells
 
-    cells = coiled_cells(model)
+    cells = coiled_cells(model.tape)
     b = model.config.tape.b
     mask = (cells["psi"] > lo) & (cells["psi"] < hi) & (np.abs(cells["xi2"]) <= 0.3 * b)
     return {k: v[mask] for k, v in cells.items()}

@@ -37,9 +37,8 @@ def deploy(coiling, config):
     from tapecoil.phases.deployment import DeploymentModel, DeploymentRun
 
     saved = coiling.model.q.x.array.copy(), coiling.contact.psi.x.array.copy()
-    coiling.config = config
     try:
-        model = DeploymentModel(coiling)
+        model = DeploymentModel(coiling.tape, config)
         run = DeploymentRun(model)
         run.run()
         return model, run.result
@@ -144,7 +143,7 @@ def test_lambda_of_a_straight_tape_leaving_the_hub(deployed_short):
     try:
         # every point on the hub's top tangent line, straight along +x from the root at x = 0
         # (hub angle 0 geometry), the section flat: lambda = 1 (nothing wound)
-        model.coiling.root.set(1.0, 0.0)
+        model.tape.root.set(1.0, 0.0)
         model.contact.reset()
         target = np.vstack([nodes.xi[0], nodes.xi[1], np.zeros_like(nodes.xi[0])])
         q[nodes.u_dofs] = (target - nodes.reference).T
@@ -155,7 +154,7 @@ def test_lambda_of_a_straight_tape_leaving_the_hub(deployed_short):
         assert lift["lambda"] == pytest.approx(1.0, abs=0.02)
     finally:
         q[:] = saved
-        model.coiling.root.set(1.0, model.hub_angle)
+        model.tape.root.set(1.0, model.hub_angle)
 
 
 def test_bad_deployment_config_is_rejected_before_computing():
@@ -191,3 +190,27 @@ def test_trapezoidal_rule_conserves_energy_through_a_whole_deployment(stowed_sho
     dissipated = np.array([r["dissipated_energy"] for r in h])
     assert np.abs(dissipated).max() < 1e-6 * stowed
     assert h[-1]["kinetic_energy"] > 0.5 * stowed
+
+
+def test_deployment_from_a_checkpoint_builds_no_coiling_problem(stowed_short, tmp_path, monkeypatch):
+    """Deploying from a stowed checkpoint reads the tape alone: no coiling forms, no coiling SNES."""
+    from tapecoil.phases import coiling
+    from tapecoil.phases.coiling import write_checkpoint
+    from tapecoil.phases.deployment import run_deployment
+
+    meta = {"phase": "coiling", "hub_angle": stowed_short.root.angle, "tension": 1.0, "completed": True}
+    write_checkpoint(stowed_short, tmp_path / "stowed", meta)
+
+    def refuse(*_args, **_kwargs):
+        raise AssertionError("the deployment built a coiling model")
+
+    monkeypatch.setattr(coiling.CoilingModel, "__init__", refuse)
+    config = short_stowed_config(t_end=0.0005)
+    config = dataclasses.replace(config, output=dataclasses.replace(config.output, checkpoint=False))
+    summary, model = run_deployment(
+        config, tmp_path / "out", MPI.COMM_SELF, stowed=tmp_path / "stowed", progress=False
+    )
+    assert summary["time"] == pytest.approx(0.0005)
+    assert summary["run"]["steps"] > 0
+    # the deployment starts from the checkpoint's state
+    assert model.hub_angle == pytest.approx(stowed_short.root.angle)

@@ -73,7 +73,7 @@ def run(
                     directory,
                     comm,
                     stowed=stowed,
-                    coiling=model,
+                    tape=None if model is None else model.tape,
                     progress=progress,
                     stop=stop,
                     resume=resume_deploy,

@@ -16,7 +16,7 @@ from tapecoil import theory
 from tapecoil.core.dofs import cell_midpoint_values, global_scalar
 
 if TYPE_CHECKING:
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
 def _ramps(psi: np.ndarray, ramp_width: float, margin: float) -> np.ndarray:
@@ -25,18 +25,18 @@ def _ramps(psi: np.ndarray, ramp_width: float, margin: float) -> np.ndarray:
     return (phase >= 2 * math.pi - ramp_width - margin) | (phase <= margin)
 
 
-def ploy_measure(model: CoilingModel, coiled=None, xi1=None, xi2=None, k_trans=None) -> dict:
+def ploy_measure(tape: TapeOnHub, coiled=None, xi1=None, xi2=None, k_trans=None) -> dict:
     """The ploy (transition) region at the current state against physics.md Sec. 7 (collective).
 
     Along the cells next to the centre line beyond the tangent point: the length over which the
     transverse curvature rises from 0.1/R to 0.9/R. None when the free part is too short for
     the section to recover (near the end of the coiling run). Cell values may be passed in.
     """
-    tp = model.config.tape
+    tp = tape.config.tape
     if coiled is None:
-        coiled = model.coil_geometry(model.root.angle)["coiled_length"]
-        _, cells = cell_midpoint_values(model.model.mesh, [model.model.curvatures()[1]])
-        cells = np.vstack(model.comm.allgather(cells))
+        coiled = tape.coil_geometry(tape.root.angle)["coiled_length"]
+        _, cells = cell_midpoint_values(tape.model.mesh, [tape.model.curvatures()[1]])
+        cells = np.vstack(tape.comm.allgather(cells))
         xi1, xi2, k_trans = cells[:, 0], cells[:, 1], cells[:, 2]
     centre = np.abs(xi2) <= np.min(np.abs(xi2)) + 1e-9
     order = np.argsort(xi1[centre])
@@ -52,7 +52,7 @@ def ploy_measure(model: CoilingModel, coiled=None, xi1=None, xi2=None, k_trans=N
             ploy = float(s_b[high[0]] - start)
     return {
         "computed": ploy,
-        "hub_angle": model.root.angle,
+        "hub_angle": tape.root.angle,
         "reference_arc_width": theory.ploy_length(tp.b, tp.R, tp.h),
         "reference_projected_width": theory.ploy_length(2 * tp.R * math.sin(tp.alpha / 2), tp.R, tp.h),
         "free_length": tp.L - coiled,
@@ -61,7 +61,7 @@ def ploy_measure(model: CoilingModel, coiled=None, xi1=None, xi2=None, k_trans=N
     }
 
 
-def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
+def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     """Measured quantities of the coil at the current state against physics.md (collective).
 
     ``cells``: :func:`coiled_cells` of the current state, if the caller has them already.
@@ -71,11 +71,11 @@ def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
     and from the tangent point, away from the climbs over the root step, over the inner 60 % of
     the width (the thesis's comparison region; the free edges carry a boundary layer).
     """
-    cfg = model.config
-    tp, r_hub, h = cfg.tape, model.r_hub, cfg.tape.h
-    m, contact = model.model, model.contact
-    angle = model.root.angle
-    geometry = model.coil_geometry(angle)
+    cfg = tape.config
+    tp, r_hub, h = cfg.tape, tape.r_hub, cfg.tape.h
+    m, contact = tape.model, tape.contact
+    angle = tape.root.angle
+    geometry = tape.coil_geometry(angle)
     coiled = geometry["coiled_length"]
     out: dict = {"hub_angle": angle, "coiled_length": coiled}
 
@@ -89,12 +89,12 @@ def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
     coiled_energy = sum(global_scalar(f, m.mesh.comm) for f in m.energy_forms(wound))
     wound_angle = theory.rotation_for_coiled_length(coiled, r_hub, h)
     reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu)
-    total = model.energies()
+    total = tape.energies()
     out["stored_energy_coiled"] = entry(coiled_energy, reference_energy)
     out["strain_energy_total"] = entry(total["strain"], reference_energy, note="includes the ploy region")
 
     # curvatures and stresses at cell midpoints
-    cells = coiled_cells(model) if cells is None else cells
+    cells = coiled_cells(tape) if cells is None else cells
     xi1, xi2, psi, k_long, k_trans = (cells[k] for k in ("xi1", "xi2", "psi", "kappa_long", "kappa_trans"))
     sx, sy = np.abs(cells["sigma_x"]), np.abs(cells["sigma_y"])
     E, nu = tp.E, tp.nu
@@ -137,7 +137,7 @@ def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
 
     # coil radius and the separation of successive turns (centre line, half a turn from the root)
     out["outer_radius"] = entry(geometry["outer_radius"], theory.outer_radius_after_rotation(angle, r_hub, h))
-    line = model.centre_line()
+    line = tape.centre_line()
     probes = [math.pi + 2 * math.pi * n for n in range(int((angle - math.pi) // (2 * math.pi)) + 1)]
     radii = np.interp(probes, line["psi"], line["radius"]) if probes else np.array([])
     out["turn_radii"] = [float(r) for r in radii]
@@ -151,17 +151,17 @@ def coil_measures(model: CoilingModel, cells: dict | None = None) -> dict:
         )
     out["first_turn_radius"] = entry(radii[0], r_hub + h / 2) if len(radii) else None
 
-    out["ploy_length"] = ploy_measure(model, coiled, xi1, xi2, k_trans)
+    out["ploy_length"] = ploy_measure(tape, coiled, xi1, xi2, k_trans)
     return out
 
 
-def coiled_cells(model: CoilingModel) -> dict[str, np.ndarray]:
+def coiled_cells(tape: TapeOnHub) -> dict[str, np.ndarray]:
     """Cell-midpoint values of the current state for the pictures (collective, every rank).
 
     Columns: xi_1, xi_2 [m], winding angle [rad], longitudinal and transverse curvature [1/m],
     surface bending stresses sigma_x, sigma_y [Pa] (signed; see :func:`coil_measures`).
     """
-    m, tp = model.model, model.config.tape
+    m, tp = tape.model, tape.config.tape
     kx, ky = m.curvatures()
     # surface bending stresses (physics.md Sec. 4) from the curvature changes: the parameter
     # metric is the identity (xi_1 = x, xi_2 = arc length), so k_11 and k_22 are physical. The
@@ -170,8 +170,8 @@ def coiled_cells(model: CoilingModel) -> dict[str, np.ndarray]:
     k = m.bending_strain
     c = tp.E / (1 - tp.nu**2) * 0.5 * tp.h
     stresses = [c * (k[0, 0] + tp.nu * k[1, 1]), c * (k[1, 1] + tp.nu * k[0, 0])]
-    _, cells = cell_midpoint_values(m.mesh, [model.contact.psi, kx, ky, *stresses])
-    cells = np.vstack(model.comm.allgather(cells))
+    _, cells = cell_midpoint_values(m.mesh, [tape.contact.psi, kx, ky, *stresses])
+    cells = np.vstack(tape.comm.allgather(cells))
     cells = cells[np.lexsort((cells[:, 1], cells[:, 0]))]
     names = ("xi1", "xi2", "psi", "kappa_long", "kappa_trans", "sigma_x", "sigma_y")
     return {name: cells[:, i] for i, name in enumerate(names)}

@@ -46,15 +46,11 @@ from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation, StepRecord
-from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, StripMesh, create_strip_mesh
-from tapecoil.geometry.sections import CircularArcSection
-from tapecoil.geometry.surfaces import StripGeometry
-from tapecoil.hub.attachment import HubRoot
-from tapecoil.hub.contact import CoilContact, default_penalty
-from tapecoil.hub.frame import HubFrame
+from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
 from tapecoil.measures.coiling import coil_measures, coiled_cells, ploy_measure
 from tapecoil.models.edges import facet_condition
-from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
+from tapecoil.models.shell import Nodes
+from tapecoil.phases.tape_on_hub import TapeOnHub
 
 # the pull at the free end rises with the flattening; the guide line is the hub's top tangent
 _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
@@ -119,10 +115,11 @@ class AlongTape:
 
 
 class CoilingModel:
-    """The tape, hub, attachment, guide, contact and solver of a coiling run.
+    """A coiling run's loads and solver on a :class:`TapeOnHub`: the guide, the pull, the
+    relaxation, the SNES and the predictor.
 
-    ``strip``: an existing strip mesh (a restart); otherwise one is built from ``config`` (or
-    ``resolution``). The free end is pulled by the force T (``coiling.tension``).
+    ``tape``: an existing tape on its hub (a checkpoint's); otherwise one is built from
+    ``config`` (or ``resolution``). The free end is pulled by the force T (``coiling.tension``).
     """
 
     def __init__(
@@ -130,31 +127,22 @@ class CoilingModel:
         config: Config,
         comm=MPI.COMM_WORLD,
         resolution: MeshResolution | None = None,
-        strip: StripMesh | None = None,
+        tape: TapeOnHub | None = None,
     ):
         self.config = config
         self.comm = comm
-        tp, r_hub = config.tape, config.hub.radius
-        self.r_hub = r_hub
-        if strip is None:
-            geom = StripGeometry(tp.R, tp.b, tp.L)
-            strip = create_strip_mesh(comm, geom, resolution or MeshResolution.from_config(config.mesh, tp.L))
-        self.strip = strip
-        res = strip.resolution
-        self.element_length = tp.L / res.along
-        self.model = model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
-        self.frame = HubFrame(r_hub, tp.h, config.coiling.sense)
-        self.axis_point = self.frame.axis_point
-        self.root = HubRoot(model, ROOT, self.frame, CircularArcSection.from_tape(tp))
-
-        cc = config.contact
-        self.penalty = cc.penalty or cc.penalty_scale * default_penalty(tp.E, tp.h, self.element_length)
-        max_turns = math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1
-        # the climb over the root end spread over about two elements (at least 0.3 rad)
-        ramp = max(2 * self.element_length / r_hub, 0.3)
-        smoothing = cc.smoothing * tp.h
-        self.contact = CoilContact(model, self.frame, self.penalty, max_turns, ramp, smoothing)
-        self.contact.reset()
+        self.tape = tape = tape or TapeOnHub(config, comm, resolution)
+        tp = config.tape
+        # the parts of the tape this phase loads and solves for
+        self.strip, self.model, self.frame, self.root, self.contact = (
+            tape.strip,
+            tape.model,
+            tape.frame,
+            tape.root,
+            tape.contact,
+        )
+        self.element_length, self.penalty = tape.element_length, tape.penalty
+        strip, model = self.strip, self.model
 
         free_end = strip.facet_tags.find(FREE_END)
         self.guide = [facet_condition(model, sub, free_end) for sub in _GUIDE_COMPONENTS]
@@ -165,7 +153,7 @@ class CoilingModel:
         # the pull: T spread evenly over the free end's arc; its work is T times the end's mean u_x
         self.end_slide_form = dolfinx.fem.form(model.u[0] / tp.b * model.ds(FREE_END))
         pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
-        self.energy = model.strain_energy + self.contact.energy
+        self.energy = tape.energy
         self.viscosity, self.previous, viscous = model.relaxation(length_scale=self.element_length)
         potential = self.energy - pull_work
         self.residual_form = ufl.derivative(potential, model.q, model.dq)
@@ -178,19 +166,9 @@ class CoilingModel:
         self.solver = SNESSolver.from_config(
             F, model.jacobian_form(F), model.q, bcs, config.solver, defaults={"pc_type": "cholesky"}
         )
-        self.forms = {
-            name: dolfinx.fem.form(form)
-            for name, form in (
-                ("membrane", model.energy_membrane),
-                ("bending", model.energy_bending),
-                ("shear", model.energy_shear),
-                ("contact_hub", self.contact.energy_hub),
-                ("contact_coil", self.contact.energy_coil),
-            )
-        }
         self._reaction_form = None
         self._converged: list[tuple[float, np.ndarray]] = []
-        self.predictor = choose_predictor(config.coiling.predictor, self.element_length, r_hub)
+        self.predictor = choose_predictor(config.coiling.predictor, self.element_length, tape.r_hub)
         self._along_tape = AlongTape(self.contact.nodes, comm) if self.predictor == "shift" else None
 
     # -- loading --------------------------------------------------------------------------
@@ -255,33 +233,17 @@ class CoilingModel:
         """Restore the secant's memory of the step before the current one (a restart)."""
         self._converged = [(angle, state.copy())]
 
-    # -- measures -------------------------------------------------------------------------
-    def energies(self) -> dict[str, float]:
-        out = {name: global_scalar(form, self.model.mesh.comm) for name, form in self.forms.items()}
-        out["strain"] = out["membrane"] + out["bending"] + out["shear"]
-        out["contact"] = out["contact_hub"] + out["contact_coil"]
-        return out
-
     def end_slide(self) -> float:
         """Mean displacement of the free end along the guide (+x) [m]."""
         return global_scalar(self.end_slide_form, self.model.mesh.comm)
-
-    def _edge_dofs(self, tag: int, component: int) -> np.ndarray:
-        """Owned W-dofs of displacement component ``component`` on the edge ``tag``."""
-        facets = self.strip.facet_tags.find(tag)
-        sub = self.model.W.sub(0).sub(component)
-        V, _ = sub.collapse()
-        dofs = dolfinx.fem.locate_dofs_topological((sub, V), self.model.mesh.topology.dim - 1, facets)[0]
-        owned = self.model.W.dofmap.index_map.size_local * self.model.W.dofmap.index_map_bs
-        return dofs[dofs < owned]
 
     def internal_force(self) -> np.ndarray:
         """The internal force vector dE/dq (strain + contact energy), local array (collective)."""
         if self._reaction_form is None:
             self._reaction_form = dolfinx.fem.form(ufl.derivative(self.energy, self.model.q, self.model.dq))
             self._reaction_vector = dolfinx.fem.Function(self.model.W)
-            self._end_dofs = self._edge_dofs(FREE_END, 0)
-            self._root_dofs = [self._edge_dofs(ROOT, i) for i in range(3)]
+            self._end_dofs = self.tape.edge_dofs(FREE_END, (0, 0))
+            self._root_dofs = [self.tape.edge_dofs(ROOT, (0, i)) for i in range(3)]
         b = self._reaction_vector.x
         b.array[:] = 0.0
         dolfinx.fem.assemble_vector(b.array, self._reaction_form)
@@ -304,47 +266,6 @@ class CoilingModel:
         root = sum(direction[i] * float(f[dofs].sum()) for i, dofs in enumerate(self._root_dofs))
         end, root = self.comm.allreduce(np.array([float(f[self._end_dofs].sum()), root]), op=MPI.SUM)
         return {"tension": float(end), "root_tension": -float(root)}
-
-    def centre_line(self) -> dict[str, np.ndarray]:
-        """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
-
-        Columns: xi_1, winding angle psi, mid-surface distance from the hub axis.
-        """
-        nodes = self.contact.nodes
-        n_owned = nodes.space.dofmap.index_map.size_local
-        xi = nodes.xi[:, :n_owned]
-        distance = np.abs(xi[1])
-        local_min = distance.min() if distance.size else np.inf
-        centre = self.comm.allreduce(local_min, op=MPI.MIN)
-        mask = distance <= centre + 1e-9 * self.config.tape.b
-        radius, _ = self.contact.polar(nodes.positions(self.model.q.x.array)[:, :n_owned])
-        local = np.column_stack([xi[0][mask], self.contact.psi.x.array[:n_owned][mask], radius[mask]])
-        rows = np.vstack(self.comm.allgather(local))
-        rows = rows[np.argsort(rows[:, 0])]
-        return {"xi1": rows[:, 0], "psi": rows[:, 1], "radius": rows[:, 2]}
-
-    def coil_geometry(self, angle: float) -> dict[str, float]:
-        """Coiled length and outer coil radius [m] (collective).
-
-        The coiled length is the material length behind the tangent point, where the centre
-        line's winding angle equals the hub angle. The outer radius is that of the outer face of
-        the last turn half a turn behind the tangent point (mid-surface distance + h/2): at the
-        tangent point itself the tape is already lifting off into the ploy region.
-        """
-        line = self.centre_line()
-        psi, xi1, radius = line["psi"], line["xi1"], line["radius"]
-        h = self.config.tape.h
-        if angle <= psi[0]:
-            return {"coiled_length": 0.0, "outer_radius": float(radius[0] + h / 2)}
-        s = float(np.interp(angle, psi, xi1))
-        probe = angle - math.pi if angle > math.pi else angle
-        r = float(np.interp(probe, psi, radius))
-        return {"coiled_length": s, "outer_radius": r + 0.5 * h}
-
-    def max_penetration(self) -> float:
-        """Largest penetration of the inner face into the hub or the turn beneath [m] (>= 0)."""
-        local = self.contact.nodal_penetration()
-        return max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
 
 
 @dataclass
@@ -402,9 +323,9 @@ class CoilingRun:
     def _row(self, phase: str, load: float, step: StepRecord) -> dict:
         m = self.m
         angle = m.root.angle
-        e = m.energies()
+        e = m.tape.energies()
         slide = m.end_slide()
-        geometry = m.coil_geometry(angle)
+        geometry = m.tape.coil_geometry(angle)
         forces = m.edge_forces()
         tension, root_tension = forces["tension"], forces["root_tension"]
         # hub torque from the energy balance of the step: work of the hub = change of stored
@@ -437,7 +358,7 @@ class CoilingRun:
             "strain_energy": e["strain"],
             "contact_energy_hub": e["contact_hub"],
             "contact_energy_coil": e["contact_coil"],
-            "max_penetration": m.max_penetration(),
+            "max_penetration": m.tape.max_penetration(),
             "coiled_length": geometry["coiled_length"],
             "outer_radius": geometry["outer_radius"],
             "wall_time": time.perf_counter() - self._t0,
@@ -518,40 +439,29 @@ class CoilingRun:
 
 # -- checkpoint -------------------------------------------------------------------------------
 def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict) -> None:
-    """The state a restart or the deployment needs: mesh and tags, u, theta, winding angle, meta.
-
-    adios4dolfinx (ADIOS2 BP) for the mesh and the functions (and, for the secant predictor,
-    the previous converged state); ``meta`` (hub angle, tension, the stepping's restart state)
-    as JSON beside it. Written atomically (:mod:`tapecoil.core.checkpoint`).
-    """
-    functions = {**state_parts(model.model.q, ""), "winding_angle": model.contact.psi}
+    """The state a restart or the deployment needs (:meth:`TapeOnHub.write_checkpoint`), with,
+    for the secant predictor, the previous converged state; ``meta`` holds the hub angle, the
+    tension and the stepping's restart state."""
+    extra = {}
     previous = model.previous_converged()
     if previous is not None:
         state = dolfinx.fem.Function(model.model.W)
         state.x.array[:] = previous[1]
-        functions.update(state_parts(state, "previous_"))
-    checkpoint.write_checkpoint(path, model.strip, functions, meta, model.comm)
+        extra = state_parts(state, "previous_")
+    model.tape.write_checkpoint(path, meta, extra)
 
 
 def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[CoilingModel, dict]:
-    """A :class:`CoilingModel` in the state written by :func:`write_checkpoint` (any rank count)."""
-    meta = checkpoint.read_meta(path)
-    tp = config.tape
-    strip = checkpoint.read_strip(path, StripGeometry(tp.R, tp.b, tp.L), comm)
-    model = CoilingModel(config, comm, strip=strip)
-    W = model.model.W
-    parts = checkpoint.empty_state_parts(W, "")
-    checkpoint.read_functions(path, {**parts, "winding_angle": model.contact.psi})
-    checkpoint.set_state(model.model.q, parts, "")
+    """A :class:`CoilingModel` in the state of a checkpoint (any phase's, any rank count)."""
+    tape, meta = TapeOnHub.read_checkpoint(path, config, comm)
+    model = CoilingModel(config, comm, tape=tape)
     previous_angle = meta.get("run", {}).get("previous_angle")
     if previous_angle is not None:
-        previous = checkpoint.empty_state_parts(W, "previous_")
+        previous = checkpoint.empty_state_parts(model.model.W, "previous_")
         checkpoint.read_functions(path, previous)
-        state = dolfinx.fem.Function(W)
+        state = dolfinx.fem.Function(model.model.W)
         checkpoint.set_state(state, previous, "previous_")
         model.set_previous_converged(previous_angle, state.x.array)
-    model.contact.hub_angle = meta["hub_angle"]
-    model.root.set(1.0, meta["hub_angle"])
     model.tension.value = meta["tension"]
     return model, meta
 
@@ -561,7 +471,7 @@ def _coiling_summary(
 ) -> dict:
     """The coiling phase's summary: measures against the theory and the run's figures."""
     history, res, comm = run.result.history, model.strip.resolution, model.comm
-    measures = coil_measures(model, cells)
+    measures = coil_measures(model.tape, cells)
     if ploy:
         measures["ploy_length_one_turn"] = ploy
     timing = model.solver.timing_per_iteration()
@@ -657,7 +567,7 @@ def run_coiling(
     def on_step(row):
         coiling = row["phase"] == "coil"
         if coiling and abs(row["hub_angle"] - 2 * math.pi) < 1e-9:
-            ploy.update(ploy_measure(model))  # one turn in: the free part is long
+            ploy.update(ploy_measure(model.tape))  # one turn in: the free part is long
         out.step(row["hub_angle"], row["step"], row["newton_iterations"], f" {row['phase']}", coiling)
 
     if config.output.checkpoint:
@@ -681,7 +591,7 @@ def run_coiling(
     write_csv(directory / "coiling_history.csv", history, comm)
     if config.output.checkpoint:
         write_checkpoint(model, directory / "stowed", checkpoint_meta(run.result.completed))
-    cells = coiled_cells(model)
+    cells = coiled_cells(model.tape)
     if comm.rank == 0:
         np.savetxt(
             directory / "coiled_cells.csv",

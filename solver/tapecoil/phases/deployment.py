@@ -42,7 +42,7 @@ from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
 from tapecoil.measures.deployment import deployment_measures
 from tapecoil.models.shell import director_from_angles
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
 def director_rates(model, theta, theta_dot, theta_ddot=None):
@@ -74,18 +74,19 @@ def _parts(expr):
 class DeploymentModel:
     """The released tape: root held at the stowed hub angle, contact kept, inertia added.
 
-    ``coiling`` is a :class:`CoilingModel` in the stowed state (from a run or a checkpoint); its
-    shell, contact and root attachment are reused. ``rho_inf`` overrides the configured
-    spectral radius.
+    ``tape`` is a :class:`TapeOnHub` in the stowed state (a coiling run's, or read from a
+    checkpoint of either phase); its shell, contact and root attachment are reused.
+    ``config`` (default: the tape's) sets the deployment; ``rho_inf`` overrides its spectral
+    radius.
     """
 
     # lift-off: a centre-line point whose inner face is more than this many thicknesses off its
     # obstacle (the turn beneath or the hub) has left the coil (see lift_off)
     lift_off_gap = 2.0
 
-    def __init__(self, coiling: CoilingModel, rho_inf: float | None = None):
-        self.coiling = c = coiling
-        self.config = cfg = c.config
+    def __init__(self, tape: TapeOnHub, config: Config | None = None, rho_inf: float | None = None):
+        self.tape = c = tape
+        self.config = cfg = config or tape.config
         self.comm = c.comm
         self.model = model = c.model
         self.contact = c.contact
@@ -237,7 +238,7 @@ class DeploymentModel:
 
     def _owned_edge_dofs(self, tag: int) -> np.ndarray:
         """Owned W-dofs (local indices) of every state component on the edge ``tag``."""
-        facets = self.coiling.strip.facet_tags.find(tag)
+        facets = self.tape.strip.facet_tags.find(tag)
         W = self.model.W
         dofs = []
         for i, n in ((0, 3), (1, 2)):
@@ -330,7 +331,7 @@ class DeploymentModel:
         # inertia (rho h^3/12) is a transient of nanoseconds, which the predictor would
         # extrapolate into radians; the mass matrix has no u-theta coupling at rest, so the
         # translational part is the consistent one regardless
-        ti.a_old.x.array[self.coiling.contact.nodes.theta_dofs.ravel()] = 0.0
+        ti.a_old.x.array[self.contact.nodes.theta_dofs.ravel()] = 0.0
         ti.v_old.x.array[:] = 0.0
         ti.restart()
         for obj in (ksp, M, b, x):
@@ -338,7 +339,7 @@ class DeploymentModel:
 
     # -- measures -------------------------------------------------------------------------------
     def energies(self) -> dict[str, float]:
-        out = self.coiling.energies()
+        out = self.tape.energies()
         out["kinetic"] = global_scalar(self.kinetic_form, self.model.mesh.comm)
         return out
 
@@ -482,7 +483,7 @@ class DeploymentRun:
             "tip_x": tip[0],
             "tip_y": tip[1],
             "tip_z": tip[2],
-            "max_penetration": m.coiling.max_penetration(),
+            "max_penetration": m.tape.max_penetration(),
             "wall_time": time.perf_counter() - self._t0,
         }
         self.result.history.append(row)
@@ -573,23 +574,19 @@ def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: 
     stowed state the release refers to and, for the conserving scheme, the director velocity."""
     ti = model.integrator
     functions = {
-        **state_parts(model.model.q, ""),
-        "winding_angle": model.contact.psi,
         **state_parts(ti.v_old, "velocity_"),
         **state_parts(ti.a_old, "acceleration_"),
         **state_parts(model.stowed, "stowed_"),
     }
     if model.scheme == "conserving":
         functions["director_rate"] = model.director_rate
-    checkpoint.write_checkpoint(path, model.coiling.strip, functions, meta, model.comm)
+    model.tape.write_checkpoint(path, meta, functions)
 
 
 def read_deployment_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD):
     """A :class:`DeploymentModel` in the state of :func:`write_deployment_checkpoint`, and the meta."""
-    from tapecoil.phases.coiling import read_checkpoint
-
-    coiling, meta = read_checkpoint(path, config, comm)
-    model = DeploymentModel(coiling)
+    tape, meta = TapeOnHub.read_checkpoint(path, config, comm)
+    model = DeploymentModel(tape, config)
     model.restore(path)
     return model, meta
 
@@ -597,7 +594,7 @@ def read_deployment_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_W
 def _deployment_summary(model: DeploymentModel, run: DeploymentRun, interrupted, t_start: float) -> dict:
     """The deployment phase's summary: measures against the theory and the run's figures."""
     history, comm = run.result.history, model.comm
-    res = model.coiling.strip.resolution
+    res = model.tape.strip.resolution
     timing = model.solver.timing_per_iteration()
     steps = history[1:]
     return {
@@ -634,14 +631,15 @@ def run_deployment(
     directory: str | Path,
     comm=MPI.COMM_WORLD,
     stowed: str | Path | None = None,
-    coiling: CoilingModel | None = None,
+    tape: TapeOnHub | None = None,
     progress: bool = True,
     stop=None,
     resume: str | Path | None = None,
 ) -> tuple[dict, DeploymentModel]:
     """Deploy from the stowed state, writing into ``directory``; returns the phase summary and model.
 
-    The start is the stowed checkpoint directory ``stowed``, the in-memory ``coiling`` model, or,
+    The start is the stowed checkpoint directory ``stowed``, the in-memory ``tape`` (a coiling
+    run's, in its stowed state), or,
     with ``resume``, a deployment checkpoint (deployed/) to continue from as if never stopped.
     ``directory`` receives deployment_history.csv (a row per step), deployment.bp and snapshots/
     (every ``output.vtx_every`` steps and the last state) and deployed/ (the checkpoint: the
@@ -651,8 +649,6 @@ def run_deployment(
     from tapecoil.app import results
     from tapecoil.core.interrupt import Interrupted
     from tapecoil.core.output import write_csv
-    from tapecoil.phases.coiling import read_checkpoint
-
     directory = Path(directory)
     t_start = time.perf_counter()
     restart = None
@@ -660,12 +656,11 @@ def run_deployment(
         model, meta = read_deployment_checkpoint(resume, config, comm)
         restart = meta["run"]
     else:
-        if coiling is None:
+        if tape is None:
             if stowed is None:
-                raise ValueError("deployment needs a stowed checkpoint directory or a coiling model")
-            coiling, _ = read_checkpoint(stowed, config, comm)
-        model = DeploymentModel(coiling)
-    coiling = model.coiling
+                raise ValueError("deployment needs a stowed checkpoint directory or a stowed tape")
+            tape, _ = TapeOnHub.read_checkpoint(stowed, config, comm)
+        model = DeploymentModel(tape, config)
     d = config.deployment
     run = DeploymentRun(model, stop=stop)
     if restart is not None:

@@ -1,0 +1,164 @@
+"""The tape on its hub: the strip, the shell, the hub, the root attachment and the contact.
+
+What every phase of a tape spring's life on a hub shares, and nothing a single phase adds: the
+coiling adds the guide, the pull, its solver and predictor; the deployment the inertia, the
+release and its time stepping. A checkpoint of any phase holds this state (the shell's state and
+the winding angles), so a phase starts from another's checkpoint by reading this alone, without
+building the other phase's forms or solver.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+
+from tapecoil.config import Config
+from tapecoil.core import checkpoint
+from tapecoil.core.checkpoint import state_parts
+from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
+from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_strip_mesh
+from tapecoil.geometry.sections import CircularArcSection
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.hub.attachment import HubRoot
+from tapecoil.hub.contact import CoilContact, default_penalty
+from tapecoil.hub.frame import HubFrame
+from tapecoil.models.shell import NaghdiShell, ShellMaterial
+
+
+class TapeOnHub:
+    """The tape's strip and shell, the hub (:class:`HubFrame`), the root and the contact.
+
+    ``strip``: an existing strip mesh (a checkpoint's); otherwise one is built from ``config``
+    (or ``resolution``).
+    """
+
+    def __init__(
+        self,
+        config: Config,
+        comm=MPI.COMM_WORLD,
+        resolution: MeshResolution | None = None,
+        strip: StripMesh | None = None,
+    ):
+        self.config = config
+        self.comm = comm
+        tp, r_hub = config.tape, config.hub.radius
+        self.r_hub = r_hub
+        if strip is None:
+            geom = StripGeometry(tp.R, tp.b, tp.L)
+            strip = create_strip_mesh(comm, geom, resolution or MeshResolution.from_config(config.mesh, tp.L))
+        self.strip = strip
+        self.element_length = tp.L / strip.resolution.along
+        self.model = model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
+        self.frame = HubFrame(r_hub, tp.h, config.coiling.sense)
+        self.axis_point = self.frame.axis_point
+        self.root = HubRoot(model, ROOT, self.frame, CircularArcSection.from_tape(tp))
+
+        cc = config.contact
+        self.penalty = cc.penalty or cc.penalty_scale * default_penalty(tp.E, tp.h, self.element_length)
+        max_turns = math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1
+        # the climb over the root end spread over about two elements (at least 0.3 rad)
+        ramp = max(2 * self.element_length / r_hub, 0.3)
+        smoothing = cc.smoothing * tp.h
+        self.contact = CoilContact(model, self.frame, self.penalty, max_turns, ramp, smoothing)
+        self.contact.reset()
+        # strain + contact energy: the stored energy whose gradient is the internal force
+        self.energy = model.strain_energy + self.contact.energy
+        self.forms = {
+            name: dolfinx.fem.form(form)
+            for name, form in (
+                ("membrane", model.energy_membrane),
+                ("bending", model.energy_bending),
+                ("shear", model.energy_shear),
+                ("contact_hub", self.contact.energy_hub),
+                ("contact_coil", self.contact.energy_coil),
+            )
+        }
+
+    def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
+        """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
+        facets = self.strip.facet_tags.find(tag)
+        return owned_subspace_dofs(self.model.W, sub, self.model.mesh.topology.dim - 1, facets)
+
+    def energies(self) -> dict[str, float]:
+        out = {name: global_scalar(form, self.model.mesh.comm) for name, form in self.forms.items()}
+        out["strain"] = out["membrane"] + out["bending"] + out["shear"]
+        out["contact"] = out["contact_hub"] + out["contact_coil"]
+        return out
+
+    def centre_line(self) -> dict[str, np.ndarray]:
+        """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
+
+        Columns: xi_1, winding angle psi, mid-surface distance from the hub axis.
+        """
+        nodes = self.contact.nodes
+        n_owned = nodes.space.dofmap.index_map.size_local
+        xi = nodes.xi[:, :n_owned]
+        distance = np.abs(xi[1])
+        local_min = distance.min() if distance.size else np.inf
+        centre = self.comm.allreduce(local_min, op=MPI.MIN)
+        mask = distance <= centre + 1e-9 * self.config.tape.b
+        radius, _ = self.contact.polar(nodes.positions(self.model.q.x.array)[:, :n_owned])
+        local = np.column_stack([xi[0][mask], self.contact.psi.x.array[:n_owned][mask], radius[mask]])
+        rows = np.vstack(self.comm.allgather(local))
+        rows = rows[np.argsort(rows[:, 0])]
+        return {"xi1": rows[:, 0], "psi": rows[:, 1], "radius": rows[:, 2]}
+
+    def coil_geometry(self, angle: float) -> dict[str, float]:
+        """Coiled length and outer coil radius [m] (collective).
+
+        The coiled length is the material length behind the tangent point, where the centre
+        line's winding angle equals the hub angle. The outer radius is that of the outer face of
+        the last turn half a turn behind the tangent point (mid-surface distance + h/2): at the
+        tangent point itself the tape is already lifting off into the ploy region.
+        """
+        line = self.centre_line()
+        psi, xi1, radius = line["psi"], line["xi1"], line["radius"]
+        h = self.config.tape.h
+        if angle <= psi[0]:
+            return {"coiled_length": 0.0, "outer_radius": float(radius[0] + h / 2)}
+        s = float(np.interp(angle, psi, xi1))
+        probe = angle - math.pi if angle > math.pi else angle
+        r = float(np.interp(probe, psi, radius))
+        return {"coiled_length": s, "outer_radius": r + 0.5 * h}
+
+    def max_penetration(self) -> float:
+        """Largest penetration of the inner face into the hub or the turn beneath [m] (>= 0)."""
+        local = self.contact.nodal_penetration()
+        return max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
+
+
+    # -- checkpoint -------------------------------------------------------------------------
+    def checkpoint_functions(self) -> dict:
+        """The functions of this state in a checkpoint: u, theta and the winding angles."""
+        return {**state_parts(self.model.q, ""), "winding_angle": self.contact.psi}
+
+    def write_checkpoint(self, path: str | Path, meta: dict, extra: dict | None = None) -> None:
+        """Mesh, tags, state and winding angles (and a phase's ``extra`` functions) with ``meta``.
+
+        adios4dolfinx (ADIOS2 BP) for the mesh and the functions; ``meta`` (the hub angle and
+        each phase's restart state) as JSON beside it. Written atomically
+        (:mod:`tapecoil.core.checkpoint`).
+        """
+        functions = {**self.checkpoint_functions(), **(extra or {})}
+        checkpoint.write_checkpoint(path, self.strip, functions, meta, self.comm)
+
+    @classmethod
+    def read_checkpoint(cls, path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[TapeOnHub, dict]:
+        """The tape in the state of a checkpoint of any phase (any rank count), and its meta.
+
+        The root is attached at the checkpoint's hub angle, flattened.
+        """
+        meta = checkpoint.read_meta(path)
+        tp = config.tape
+        strip = checkpoint.read_strip(path, StripGeometry(tp.R, tp.b, tp.L), comm)
+        tape = cls(config, comm, strip=strip)
+        parts = checkpoint.empty_state_parts(tape.model.W, "")
+        checkpoint.read_functions(path, {**parts, "winding_angle": tape.contact.psi})
+        checkpoint.set_state(tape.model.q, parts, "")
+        tape.contact.hub_angle = meta["hub_angle"]
+        tape.root.set(1.0, meta["hub_angle"])
+        return tape, meta
