@@ -50,6 +50,7 @@ from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
 from tapecoil.measures.coiling import coil_measures, coiled_cells, ploy_measure
 from tapecoil.models.edges import facet_condition
 from tapecoil.models.shell import Nodes
+from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 # the pull at the free end rises with the flattening; the guide line is the hub's top tangent
@@ -466,39 +467,104 @@ def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tu
     return model, meta
 
 
-def _coiling_summary(
-    model: CoilingModel, run: CoilingRun, ploy: dict, interrupted, t_start: float, cells=None
-) -> dict:
-    """The coiling phase's summary: measures against the theory and the run's figures."""
-    history, res, comm = run.result.history, model.strip.resolution, model.comm
-    measures = coil_measures(model.tape, cells)
-    if ploy:
-        measures["ploy_length_one_turn"] = ploy
-    timing = model.solver.timing_per_iteration()
-    return {
-        "completed": run.result.completed,
-        "message": run.result.message,
-        "interrupted": None if interrupted is None else interrupted.name,
-        "hub_angle": model.root.angle,
-        "target_hub_angle": model.config.coiling.hub_angle,
-        "measures": measures,
-        "run": {
-            "ranks": comm.size,
-            "dofs": global_size(model.model.W),
-            "mesh": f"{res.along} x {res.across}",
-            "predictor": model.predictor,
-            "penalty": model.penalty,
-            "steps": len([r for r in history if r["phase"] == "coil"]),
-            "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
-            # this process's, including the attempts that failed and were cut back
-            "newton_iterations_total": int(model.solver.timings["iterations"]),
-            "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
-            "wall_time": history[-1]["wall_time"] if history else 0.0,
-            "process_wall_time": time.perf_counter() - t_start,
-            "assembly_per_iteration": timing["assembly"],
-            "linear_solve_per_iteration": timing["linear_solve"],
-        },
-    }
+class CoilingPhase(Phase):
+    """Coiling as a phase of :func:`~tapecoil.phases.runner.run_phase`: flatten, then turn the hub
+    to ``coiling.hub_angle``; the coil's measures at the end (:mod:`tapecoil.measures.coiling`)."""
+
+    name, checkpoint_name, unit = "coiling", "stowed", "rad"
+
+    def __init__(self, model: CoilingModel, restart: dict | None = None, stop=None):
+        super().__init__()
+        self.model = model
+        self.target = model.config.coiling.hub_angle
+        self.run = CoilingRun(model, stop=stop)
+        self.run.on_step = self._on_step
+        self.history = self.run.result.history
+        self.fresh = restart is None
+        # the ploy region one turn in, where the free part is long (Sec. 7 of the physics brief)
+        self.ploy = dict(restart.get("ploy") or {}) if restart else {}
+        self._cells = None
+        if restart is not None:
+            self.run.restore(restart)
+            self.history = self.run.result.history
+
+    def position(self) -> float:
+        return self.model.root.angle
+
+    def restart_state(self) -> dict:
+        return {**self.run.restart_state(), "ploy": self.ploy}
+
+    def checkpoint_meta(self) -> dict:
+        return {"hub_angle": self.model.root.angle, "tension": float(self.model.tension.value)}
+
+    def write_checkpoint(self, path: Path, meta: dict) -> None:
+        write_checkpoint(self.model, path, meta)
+
+    def _on_step(self, row: dict) -> None:
+        if row["phase"] == "coil" and abs(row["hub_angle"] - 2 * math.pi) < 1e-9:
+            self.ploy.update(ploy_measure(self.model.tape))
+        if self.on_row is not None:
+            self.on_row(row)
+
+    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
+        coiling = row["phase"] == "coil"
+        return row["hub_angle"], row["step"], row["newton_iterations"], f" {row['phase']}", coiling
+
+    def advance(self) -> None:
+        if self.fresh:
+            self.run.flatten()
+        self.run.coil(
+            self.target,
+            start_angle=self.model.root.angle,
+            stops=(2 * math.pi,),
+            first_step=self.run.next_step,
+        )
+        self.completed = True
+
+    def finish(self, directory: Path) -> None:
+        """coiled_cells.csv: the final state at the cell midpoints (for the pictures)."""
+        self._cells = cells = coiled_cells(self.model.tape)
+        if self.model.comm.rank == 0:
+            np.savetxt(
+                directory / "coiled_cells.csv",
+                np.column_stack(list(cells.values())),
+                delimiter=",",
+                header=",".join(cells),
+                comments="",
+            )
+
+    def summary(self, interrupted, t_start: float) -> dict:
+        """The coiling phase's summary: measures against the theory and the run's figures."""
+        model, history = self.model, self.history
+        res, comm = model.strip.resolution, model.comm
+        measures = coil_measures(model.tape, self._cells)
+        if self.ploy:
+            measures["ploy_length_one_turn"] = self.ploy
+        timing = model.solver.timing_per_iteration()
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "hub_angle": model.root.angle,
+            "target_hub_angle": self.target,
+            "measures": measures,
+            "run": {
+                "ranks": comm.size,
+                "dofs": global_size(model.model.W),
+                "mesh": f"{res.along} x {res.across}",
+                "predictor": model.predictor,
+                "penalty": model.penalty,
+                "steps": len([r for r in history if r["phase"] == "coil"]),
+                "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
+                # this process's, including the attempts that failed and were cut back
+                "newton_iterations_total": int(model.solver.timings["iterations"]),
+                "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
+                "wall_time": history[-1]["wall_time"] if history else 0.0,
+                "process_wall_time": time.perf_counter() - t_start,
+                "assembly_per_iteration": timing["assembly"],
+                "linear_solve_per_iteration": timing["linear_solve"],
+            },
+        }
 
 
 def run_coiling(
@@ -521,94 +587,32 @@ def run_coiling(
     on a signal the run ends after the current step, writes everything and reports
     ``interrupted`` in the summary.
     """
-    from tapecoil.app import results
-    from tapecoil.core.interrupt import Interrupted
-    from tapecoil.core.output import write_csv
-
-    directory = Path(directory)
     t_start = time.perf_counter()
+    restart = None
     if resume is not None:
         model, meta = read_checkpoint(resume, config, comm)
         restart = meta.get("run")
         if restart is None:
             raise ValueError(f"{resume} holds no coiling restart state")
     else:
-        model, restart = CoilingModel(config, comm), None
+        model = CoilingModel(config, comm)
+    phase = CoilingPhase(model, restart, stop)
     res = model.strip.resolution
-    target = config.coiling.hub_angle
-    run = CoilingRun(model, stop=stop)
     if restart is not None:
-        run.restore(restart)
-        results.LOG.info("coiling resumed from %s at %.6g rad", resume, model.root.angle)
+        LOG.info("coiling resumed from %s at %.6g rad", resume, model.root.angle)
+        if meta["completed"] and model.root.angle >= phase.target:
+            # nothing left to do: the summary of the checkpoint's state (a resumed pipeline)
+            phase.completed = True
+            return phase.summary(None, t_start), model
     else:
-        results.LOG.info(
+        LOG.info(
             "coiling: mesh %d x %d, %d dofs on %d rank(s), predictor %s, to %g rad",
             res.along,
             res.across,
             global_size(model.model.W),
             comm.size,
             model.predictor,
-            target,
+            phase.target,
         )
-    ploy = dict(restart.get("ploy") or {}) if restart else {}
-    if restart is not None and meta["completed"] and model.root.angle >= target:
-        # nothing left to do: the summary of the checkpoint's state (a resumed pipeline)
-        run.result.completed = True
-        return _coiling_summary(model, run, ploy, None, t_start), model
-    out = results.PhaseOutput(
-        directory, model.model, "coiling", config, comm, target, "rad", progress, restart
-    )
-
-    def checkpoint_meta(completed: bool) -> dict:
-        state = {**run.restart_state(), "ploy": ploy, "output_count": out.count}
-        hub = {"hub_angle": model.root.angle, "tension": float(model.tension.value)}
-        return {"phase": "coiling", **hub, "completed": completed, "run": state}
-
-    def on_step(row):
-        coiling = row["phase"] == "coil"
-        if coiling and abs(row["hub_angle"] - 2 * math.pi) < 1e-9:
-            ploy.update(ploy_measure(model.tape))  # one turn in: the free part is long
-        out.step(row["hub_angle"], row["step"], row["newton_iterations"], f" {row['phase']}", coiling)
-
-    if config.output.checkpoint:
-        out.checkpoint = lambda: write_checkpoint(model, directory / "stowed", checkpoint_meta(False))
-    run.on_step = on_step
-    interrupted = None
-    try:
-        if restart is None:
-            run.flatten()
-        run.coil(target, start_angle=model.root.angle, stops=(2 * math.pi,), first_step=run.next_step)
-        run.result.completed = True
-    except ContinuationError as err:
-        run.result.message = str(err)
-        results.LOG.error("coiling stopped: %s", err)
-    except Interrupted as err:
-        interrupted = err
-        run.result.message = str(err)
-        results.LOG.warning("coiling %s at %.6g rad; checkpoint written", err, model.root.angle)
-    out.close(model.root.angle)
-    history = run.result.history
-    write_csv(directory / "coiling_history.csv", history, comm)
-    if config.output.checkpoint:
-        write_checkpoint(model, directory / "stowed", checkpoint_meta(run.result.completed))
-    cells = coiled_cells(model.tape)
-    if comm.rank == 0:
-        np.savetxt(
-            directory / "coiled_cells.csv",
-            np.column_stack(list(cells.values())),
-            delimiter=",",
-            header=",".join(cells),
-            comments="",
-        )
-    summary = _coiling_summary(model, run, ploy, interrupted, t_start, cells)
-    results.LOG.info(
-        "coiling %s at %.6g rad: %d steps, %d Newton iterations, %.1f s",
-        "completed" if run.result.completed else "ended",
-        model.root.angle,
-        summary["run"]["steps"],
-        summary["run"]["newton_iterations"],
-        summary["run"]["wall_time"],
-    )
+    summary = run_phase(phase, directory, config, comm, model.model, restart, progress, t_start)
     return summary, model
-
-

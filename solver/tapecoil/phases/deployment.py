@@ -35,13 +35,14 @@ from petsc4py import PETSc
 from tapecoil.config import Config
 from tapecoil.core import checkpoint, compat
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import global_scalar
+from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.core.newton import PointForce, SNESSolver
 from tapecoil.core.stepping import Continuation, ContinuationError, StepRecord
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
 from tapecoil.measures.deployment import deployment_measures
 from tapecoil.models.shell import director_from_angles
+from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
@@ -591,39 +592,93 @@ def read_deployment_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_W
     return model, meta
 
 
-def _deployment_summary(model: DeploymentModel, run: DeploymentRun, interrupted, t_start: float) -> dict:
-    """The deployment phase's summary: measures against the theory and the run's figures."""
-    history, comm = run.result.history, model.comm
-    res = model.tape.strip.resolution
-    timing = model.solver.timing_per_iteration()
-    steps = history[1:]
-    return {
-        "completed": run.result.completed,
-        "message": run.result.message,
-        "interrupted": None if interrupted is None else interrupted.name,
-        "time": history[-1]["time"],
-        "lambda": history[-1]["lambda"],
-        "rho_inf": model.rho_inf,
-        "scheme": model.scheme,
-        "measures": deployment_measures(model.config, history),
-        "run": {
-            "ranks": comm.size,
-            "dofs": model.model.W.dofmap.index_map.size_global * model.model.W.dofmap.index_map_bs,
-            "mesh": f"{res.along} x {res.across}",
-            "steps": len(steps),
-            "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
-            # this process's, including the attempts that failed and were cut back
-            "newton_iterations_total": int(model.solver.timings["iterations"]),
-            "cutbacks": int(sum(r["cutbacks"] for r in steps)),
-            "smallest_step": min((r["step"] for r in steps), default=0.0),
-            "largest_step": max((r["step"] for r in steps), default=0.0),
-            "max_penetration": max(r["max_penetration"] for r in history),
-            "wall_time": history[-1]["wall_time"],
-            "process_wall_time": time.perf_counter() - t_start,
-            "assembly_per_iteration": timing["assembly"],
-            "linear_solve_per_iteration": timing["linear_solve"],
-        },
-    }
+class DeploymentPhase(Phase):
+    """Deployment as a phase of :func:`~tapecoil.phases.runner.run_phase`: release, then time
+    steps to ``deployment.lambda_end`` or ``t_end``; measures of the deployed fraction against
+    time (:mod:`tapecoil.measures.deployment`)."""
+
+    name, checkpoint_name, unit = "deployment", "deployed", "s"
+
+    def __init__(self, model: DeploymentModel, restart: dict | None = None, stop=None):
+        super().__init__()
+        self.model = model
+        self.target = model.config.deployment.t_end
+        self.run = DeploymentRun(model, stop=stop)
+        self.run.on_step = self._on_step
+        if restart is not None:
+            self.run.restore(restart)
+        self.history = self.run.result.history
+
+    def _on_step(self, row: dict) -> None:
+        if self.on_row is not None:
+            self.on_row(row)
+
+    def position(self) -> float:
+        return self.run.time
+
+    def restart_state(self) -> dict:
+        return self.run.restart_state()
+
+    def checkpoint_meta(self) -> dict:
+        return {"hub_angle": self.model.hub_angle, "tension": 0.0}
+
+    def write_checkpoint(self, path: Path, meta: dict) -> None:
+        write_deployment_checkpoint(self.model, path, meta)
+
+    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
+        return (
+            row["time"],
+            row["step"],
+            row["newton_iterations"],
+            f" lambda {row['lambda']:.3f}",
+            row["step"] > 0,
+        )
+
+    def advance(self) -> None:
+        result = self.run.run()
+        self.completed, self.message = result.completed, result.message
+
+    def end_log(self, summary: dict) -> str:
+        run = summary["run"]
+        return (
+            f"deployment {'completed' if self.completed else 'ended'} at t = {summary['time']:.6g} s, "
+            f"lambda = {summary['lambda']:.4f}: {run['steps']} steps, {run['newton_iterations']} Newton "
+            f"iterations, {run['wall_time']:.1f} s"
+        )
+
+    def summary(self, interrupted, t_start: float) -> dict:
+        """The deployment phase's summary: measures against the theory and the run's figures."""
+        model, history = self.model, self.history
+        comm, res = model.comm, model.tape.strip.resolution
+        timing = model.solver.timing_per_iteration()
+        steps = history[1:]
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "time": history[-1]["time"],
+            "lambda": history[-1]["lambda"],
+            "rho_inf": model.rho_inf,
+            "scheme": model.scheme,
+            "measures": deployment_measures(model.config, history),
+            "run": {
+                "ranks": comm.size,
+                "dofs": global_size(model.model.W),
+                "mesh": f"{res.along} x {res.across}",
+                "steps": len(steps),
+                "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
+                # this process's, including the attempts that failed and were cut back
+                "newton_iterations_total": int(model.solver.timings["iterations"]),
+                "cutbacks": int(sum(r["cutbacks"] for r in steps)),
+                "smallest_step": min((r["step"] for r in steps), default=0.0),
+                "largest_step": max((r["step"] for r in steps), default=0.0),
+                "max_penetration": max(r["max_penetration"] for r in history),
+                "wall_time": history[-1]["wall_time"],
+                "process_wall_time": time.perf_counter() - t_start,
+                "assembly_per_iteration": timing["assembly"],
+                "linear_solve_per_iteration": timing["linear_solve"],
+            },
+        }
 
 
 def run_deployment(
@@ -639,17 +694,12 @@ def run_deployment(
     """Deploy from the stowed state, writing into ``directory``; returns the phase summary and model.
 
     The start is the stowed checkpoint directory ``stowed``, the in-memory ``tape`` (a coiling
-    run's, in its stowed state), or,
-    with ``resume``, a deployment checkpoint (deployed/) to continue from as if never stopped.
-    ``directory`` receives deployment_history.csv (a row per step), deployment.bp and snapshots/
-    (every ``output.vtx_every`` steps and the last state) and deployed/ (the checkpoint: the
-    latest converged state, every ``output.checkpoint_every`` steps and at the end). ``stop``: as
-    in :func:`tapecoil.phases.coiling.run_coiling`.
+    run's, in its stowed state), or, with ``resume``, a deployment checkpoint (deployed/) to
+    continue from as if never stopped. ``directory`` receives deployment_history.csv (a row per
+    step), deployment.bp and snapshots/ (every ``output.vtx_every`` steps and the last state)
+    and deployed/ (the checkpoint: the latest converged state, every ``output.checkpoint_every``
+    steps and at the end). ``stop``: as in :func:`tapecoil.phases.coiling.run_coiling`.
     """
-    from tapecoil.app import results
-    from tapecoil.core.interrupt import Interrupted
-    from tapecoil.core.output import write_csv
-    directory = Path(directory)
     t_start = time.perf_counter()
     restart = None
     if resume is not None:
@@ -662,66 +712,16 @@ def run_deployment(
             tape, _ = TapeOnHub.read_checkpoint(stowed, config, comm)
         model = DeploymentModel(tape, config)
     d = config.deployment
-    run = DeploymentRun(model, stop=stop)
+    phase = DeploymentPhase(model, restart, stop)
     if restart is not None:
-        run.restore(restart)
-        results.LOG.info("deployment resumed from %s at t = %.6g s", resume, run.time)
+        LOG.info("deployment resumed from %s at t = %.6g s", resume, phase.run.time)
+        if meta["completed"]:
+            # nothing left to do: the summary of the checkpoint's state (a resumed pipeline)
+            phase.completed = True
+            return phase.summary(None, t_start), model
     else:
-        results.LOG.info(
+        LOG.info(
             "deployment: %s scheme, rho_inf = %g, to lambda = %g", model.scheme, model.rho_inf, d.lambda_end
         )
-    if restart is not None and meta["completed"]:
-        # nothing left to do: the summary of the checkpoint's state (a resumed pipeline)
-        run.result.completed = True
-        return _deployment_summary(model, run, None, t_start), model
-    out = results.PhaseOutput(
-        directory, model.model, "deployment", config, comm, d.t_end, "s", progress, restart
-    )
-
-    def checkpoint_meta(completed: bool) -> dict:
-        state = {**run.restart_state(), "output_count": out.count}
-        return {
-            "phase": "deployment",
-            "hub_angle": model.hub_angle,
-            "tension": 0.0,
-            "completed": completed,
-            "run": state,
-        }
-
-    def on_step(row):
-        out.step(
-            row["time"],
-            row["step"],
-            row["newton_iterations"],
-            f" lambda {row['lambda']:.3f}",
-            row["step"] > 0,
-        )
-
-    if config.output.checkpoint:
-        out.checkpoint = lambda: write_deployment_checkpoint(
-            model, directory / "deployed", checkpoint_meta(False)
-        )
-    run.on_step = on_step
-    interrupted = None
-    try:
-        run.run()
-    except Interrupted as err:
-        interrupted = err
-        run.result.message = str(err)
-        results.LOG.warning("deployment %s at t = %.6g s; checkpoint written", err, run.time)
-    history = run.result.history
-    out.close(history[-1]["time"])
-    write_csv(directory / "deployment_history.csv", history, comm)
-    if config.output.checkpoint:
-        write_deployment_checkpoint(model, directory / "deployed", checkpoint_meta(run.result.completed))
-    summary = _deployment_summary(model, run, interrupted, t_start)
-    results.LOG.info(
-        "deployment %s at t = %.6g s, lambda = %.4f: %d steps, %d Newton iterations, %.1f s",
-        "completed" if run.result.completed else "ended",
-        summary["time"],
-        summary["lambda"],
-        summary["run"]["steps"],
-        summary["run"]["newton_iterations"],
-        summary["run"]["wall_time"],
-    )
+    summary = run_phase(phase, directory, config, comm, model.model, restart, progress, t_start)
     return summary, model

@@ -130,7 +130,6 @@ class TapeOnHub:
         local = self.contact.nodal_penetration()
         return max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
 
-
     # -- checkpoint -------------------------------------------------------------------------
     def checkpoint_functions(self) -> dict:
         """The functions of this state in a checkpoint: u, theta and the winding angles."""
