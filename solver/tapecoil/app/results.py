@@ -20,45 +20,15 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 import time
 from pathlib import Path
 
 from mpi4py import MPI
 
 from tapecoil.config import Config, to_toml
+from tapecoil.measures.measure import validation_rows
 
 LOG = logging.getLogger("tapecoil")
-
-# Acceptance of each validated quantity (issues 4 and 5): relative tolerance on the error, or
-# None where the quantity is reported against its reference without a pass mark.
-TOLERANCES = {
-    ("coiling", "stored_energy_coiled"): 0.05,
-    ("coiling", "strain_energy_total"): None,
-    ("coiling", "curvature_longitudinal"): 0.05,
-    ("coiling", "stress_x"): 0.10,
-    ("coiling", "stress_y"): 0.10,
-    ("coiling", "outer_radius"): 0.02,
-    ("coiling", "turn_separation"): 0.10,
-    ("coiling", "first_turn_radius"): None,
-    ("deployment", "time_to_0.9"): 0.05,
-    ("deployment", "time_to_0.9_plate_energy"): 0.05,
-    ("deployment", "time_to_end"): None,
-}
-
-LABELS = {
-    "stored_energy_coiled": "stored strain energy of the coiled length [J]",
-    "strain_energy_total": "strain energy of the whole tape [J]",
-    "curvature_longitudinal": "longitudinal curvature x turn radius (coiled interior) [-]",
-    "stress_x": "surface stress sigma_x / plate theory (coiled interior) [-]",
-    "stress_y": "surface stress sigma_y / plate theory (coiled interior) [-]",
-    "outer_radius": "outer coil radius [m]",
-    "turn_separation": "radial step between turns / h [-]",
-    "first_turn_radius": "mid-surface radius of the first turn [m]",
-    "time_to_0.9": "time to lambda = 0.9, modified ODE (mu) [s]",
-    "time_to_0.9_plate_energy": "time to lambda = 0.9, the ODE with the plate energy w(r) [s]",
-    "time_to_end": "time to lambda = 1, modified ODE (mu) [s]",
-}
 
 
 def prepare_directory(directory: str | Path, config: Config, comm) -> Path:
@@ -88,61 +58,6 @@ def stop_log(handler: logging.Handler | None) -> None:
         handler.close()
 
 
-def validation_rows(phase: str, measures: dict) -> list[dict]:
-    """The measures with a reference as rows: quantity, computed, reference, error, tolerance, pass."""
-    rows = []
-    for name, value in measures.items():
-        if not (isinstance(value, dict) and "computed" in value and "error" in value):
-            continue
-        tolerance = TOLERANCES.get((phase, name))
-        computed, error = value["computed"], value["error"]
-        passed = None
-        if tolerance is not None:
-            passed = (
-                computed is not None and error is not None and math.isfinite(error) and error <= tolerance
-            )
-        rows.append(
-            {
-                "phase": phase,
-                "quantity": name,
-                "label": LABELS.get(name, name),
-                "computed": computed,
-                "reference": value["reference"],
-                "error": error,
-                "tolerance": tolerance,
-                "passed": passed,
-            }
-        )
-    return rows
-
-
-def energy_rows(measures: dict) -> list[dict]:
-    """The deployment's energy balance as validation rows (numerical dissipation within 2 %)."""
-    e = measures["energy"]
-    return [
-        {
-            "phase": "deployment",
-            "quantity": "dissipated_energy",
-            "label": "numerically dissipated energy, largest / stowed energy [-]",
-            "computed": e["largest_dissipated_fraction"],
-            "reference": 0.0,
-            "error": e["largest_dissipated_fraction"],
-            "tolerance": 0.02,
-            "passed": e["largest_dissipated_fraction"] <= 0.02,
-        },
-        {
-            "phase": "deployment",
-            "quantity": "energy_growth",
-            "label": "spurious energy growth, largest / stowed energy [-]",
-            "computed": e["largest_growth_fraction"],
-            "reference": 0.0,
-            "error": e["largest_growth_fraction"],
-            "tolerance": 1e-3,
-            "passed": e["largest_growth_fraction"] <= 1e-3,
-        },
-    ]
-
-
 def write_summary(directory: str | Path, summary: dict, comm) -> None:
     """summary.json (rank 0)."""
     if comm.rank == 0:
@@ -158,7 +73,7 @@ def run_summary(phases: dict, started: float, comm=MPI.COMM_WORLD) -> dict:
         rows += validation_rows("coiling", phases["coiling"]["measures"])
     if "deployment" in phases:
         m = phases["deployment"]["measures"]
-        rows += validation_rows("deployment", m) + energy_rows(m)
+        rows += validation_rows("deployment", m)
     completed = all(p["completed"] for p in phases.values())
     interrupted = next((p["interrupted"] for p in phases.values() if p.get("interrupted")), None)
     return {
