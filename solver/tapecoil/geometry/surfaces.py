@@ -14,7 +14,9 @@ takes it to the 3D mid-surface.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -25,26 +27,55 @@ if TYPE_CHECKING:
     from tapecoil.geometry.meshes import MeshResolution
 
 
+# The functions a map may use, from numpy (also for complex arguments: the Jacobian is the map's
+# complex-step derivative) or from UFL.
+NUMPY_OPS = SimpleNamespace(sin=np.sin, cos=np.cos, sqrt=np.sqrt, exp=np.exp, log=np.log)
+
+
+def _ufl_ops():
+    import ufl
+
+    return SimpleNamespace(sin=ufl.sin, cos=ufl.cos, sqrt=ufl.sqrt, exp=ufl.exp, log=ufl.ln)
+
+
 class Surface:
     """A shell mid-surface given by an exact map phi0 from a rectangle of parameters.
 
     The parameter rectangle is [0, length] x [-width/2, width/2] for strips and a geometry's own
-    ranges otherwise (``xi_range``). Subclasses give phi0 (numpy and UFL), its Jacobian and how
-    gmsh builds the mesh. Edge tags: ROOT at xi_1 = min, FREE_END at xi_1 = max, SIDE_NEG at
-    xi_2 = min and SIDE_POS at xi_2 = max.
+    ranges otherwise (``xi_range``). A subclass writes the map once, in :meth:`map`, with the
+    functions of ``ops`` (sin, cos, sqrt, exp, log); the numpy map, the UFL map of the shell's
+    forms and the Jacobian (the complex-step derivative of the numpy map, exact to round-off)
+    all follow from it, so they cannot disagree. Edge tags: ROOT at xi_1 = min, FREE_END at
+    xi_1 = max, SIDE_NEG at xi_2 = min and SIDE_POS at xi_2 = max.
     """
 
     xi_range: tuple[tuple[float, float], tuple[float, float]]
 
-    def phi0(self, xi: np.ndarray) -> np.ndarray:
+    def map(self, xi, ops) -> tuple:
+        """The three coordinates of phi0 at parameters (xi[0], xi[1]), written with ``ops``."""
         raise NotImplementedError
 
-    def jacobian(self, xi: np.ndarray) -> np.ndarray:
-        """d phi0 / d xi at parameter points: shape (3, 2, n)."""
-        raise NotImplementedError
+    def phi0(self, xi: np.ndarray) -> np.ndarray:
+        """3D mid-surface points (3, n) of parameter points xi (2, n) or (3, n)."""
+        xi = np.asarray(xi)
+        return np.vstack(np.broadcast_arrays(*self.map(xi, NUMPY_OPS)))
 
     def phi0_ufl(self, xi):
-        raise NotImplementedError
+        """The map phi0 as a UFL vector of the parameter coordinates (SpatialCoordinate)."""
+        import ufl
+
+        return ufl.as_vector(list(self.map(xi, _ufl_ops())))
+
+    def jacobian(self, xi: np.ndarray) -> np.ndarray:
+        """d phi0 / d xi at parameter points: shape (3, 2, n) (complex-step derivative)."""
+        xi = np.asarray(xi, dtype=float)[:2]
+        step = 1e-30 * np.maximum(1.0, np.abs(xi).max(axis=1, keepdims=True))
+        J = np.empty((3, 2, xi.shape[1]))
+        for k in range(2):
+            shifted = xi.astype(complex)
+            shifted[k] += 1j * step[k]
+            J[:, k] = np.vstack(np.broadcast_arrays(*self.map(shifted, NUMPY_OPS))).imag / step[k]
+        return J
 
     def frame(self, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Orthonormal frame (t1, t2, n0), each (3, n), as the shell module builds it in UFL."""
@@ -55,11 +86,55 @@ class Surface:
         t2 = np.cross(n0.T, t1.T).T
         return t1, t2, n0
 
+    def check(self, samples: int = 7, tolerance: float = 1e-6) -> float:
+        """Check the surface over its parameter rectangle; the largest discrepancy found.
+
+        The Jacobian against central finite differences of phi0 (relative to its size), and a
+        regular map (tangents of non-zero length, not parallel). Raises ValueError beyond
+        ``tolerance``: a map that is not smooth where it is sampled, or that folds.
+        """
+        (a0, a1), (b0, b1) = self.xi_range
+        g = np.linspace(0.05, 0.95, samples)
+        xi = np.vstack([np.repeat(a0 + g * (a1 - a0), samples), np.tile(b0 + g * (b1 - b0), samples)])
+        J = self.jacobian(xi)
+        scale = np.abs(J).max()
+        worst = 0.0
+        for k, h in enumerate(1e-6 * np.array([a1 - a0, b1 - b0])):
+            e = np.zeros((2, 1))
+            e[k] = h
+            fd = (self.phi0(xi + e) - self.phi0(xi - e)) / (2 * h)
+            worst = max(worst, float(np.abs(fd - J[:, k]).max() / scale))
+        area = np.linalg.norm(np.cross(J[:, 0].T, J[:, 1].T), axis=1)
+        if worst > tolerance:
+            raise ValueError(f"the Jacobian of {type(self).__name__} disagrees with phi0 by {worst:.3g}")
+        if np.any(area <= 1e-12 * scale**2):
+            raise ValueError(f"{type(self).__name__} is singular (parallel tangents) where it was sampled")
+        return worst
+
     def build_gmsh(self, res: MeshResolution) -> None:
         """Mesh the parameter rectangle in the current gmsh model, nodes in parameter coordinates."""
         from tapecoil.geometry.meshes import _build_parameter_rectangle
 
         _build_parameter_rectangle(self.xi_range, res)
+
+
+@dataclass(frozen=True)
+class MappedSurface(Surface):
+    """A surface stated by its map: ``function(xi, ops)`` gives (x, y, z) over ``xi_range``.
+
+    For a benchmark or a new shape, e.g. a quarter of a cylinder of radius 2 and length 3::
+
+        MappedSurface(lambda xi, ops: (2 * ops.cos(xi[1]), xi[0], 2 * ops.sin(xi[1])),
+                      ((0.0, 3.0), (0.0, math.pi / 2)))
+
+    Call :meth:`Surface.check` once to see that the map is smooth and regular.
+    """
+
+    function: Callable
+    xi_range: tuple[tuple[float, float], tuple[float, float]]
+
+    def map(self, xi, ops) -> tuple:
+        return tuple(self.function(xi, ops))
 
 
 @dataclass(frozen=True)
@@ -82,36 +157,17 @@ class StripGeometry(Surface):
     def flat(self) -> bool:
         return math.isinf(self.R)
 
-    def phi0(self, xi: np.ndarray) -> np.ndarray:
-        """3D mid-surface points (3, n) of parameter points xi (2, n) or (3, n)."""
+    def map(self, xi, ops) -> tuple:
         x, s = xi[0], xi[1]
         if self.flat:
-            return np.vstack([x, s, np.zeros_like(x)])
-        return np.vstack([x, self.R * np.sin(s / self.R), self.R * (1 - np.cos(s / self.R))])
-
-    def jacobian(self, xi: np.ndarray) -> np.ndarray:
-        n = xi.shape[1]
-        J = np.zeros((3, 2, n))
-        J[0, 0] = 1.0
-        a = np.zeros(n) if self.flat else xi[1] / self.R
-        J[1, 1], J[2, 1] = np.cos(a), np.sin(a)
-        return J
+            return x, s, 0 * x
+        return x, self.R * ops.sin(s / self.R), self.R * (1 - ops.cos(s / self.R))
 
     def phi0_inverse(self, X: np.ndarray) -> np.ndarray:
         """Parameter points (2, n) of 3D mid-surface points X (3, n); inverse of :meth:`phi0`."""
         if self.flat:
             return np.vstack([X[0], X[1]])
         return np.vstack([X[0], self.R * np.arctan2(X[1], self.R - X[2])])
-
-    def phi0_ufl(self, xi):
-        """The map phi0 as a UFL vector of the parameter coordinates (SpatialCoordinate)."""
-        import ufl
-
-        if self.flat:
-            return ufl.as_vector([xi[0], xi[1], 0.0])
-        return ufl.as_vector(
-            [xi[0], self.R * ufl.sin(xi[1] / self.R), self.R * (1 - ufl.cos(xi[1] / self.R))]
-        )
 
     def build_gmsh(self, res: MeshResolution) -> None:
         """gmsh builds the 3D strip; its nodes are then moved to parameter coordinates."""
@@ -136,18 +192,6 @@ class AnnulusGeometry(Surface):
     def xi_range(self):
         return ((0.0, 2 * math.pi), (self.R_inner, self.R_outer))
 
-    def phi0(self, xi: np.ndarray) -> np.ndarray:
+    def map(self, xi, ops) -> tuple:
         a, r = xi[0], xi[1]
-        return np.vstack([r * np.cos(a), r * np.sin(a), np.zeros_like(a)])
-
-    def jacobian(self, xi: np.ndarray) -> np.ndarray:
-        a, r = xi[0], xi[1]
-        J = np.zeros((3, 2, xi.shape[1]))
-        J[0, 0], J[1, 0] = -r * np.sin(a), r * np.cos(a)
-        J[0, 1], J[1, 1] = np.cos(a), np.sin(a)
-        return J
-
-    def phi0_ufl(self, xi):
-        import ufl
-
-        return ufl.as_vector([xi[1] * ufl.cos(xi[0]), xi[1] * ufl.sin(xi[0]), 0.0])
+        return r * ops.cos(a), r * ops.sin(a), 0 * a

@@ -1,0 +1,55 @@
+"""Surfaces stated once by their map: numpy, UFL and the Jacobian follow from it and agree."""
+
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from tapecoil.geometry.surfaces import AnnulusGeometry, MappedSurface, StripGeometry
+
+
+def quarter_cylinder(radius=2.0, length=3.0):
+    return MappedSurface(
+        lambda xi, ops: (radius * ops.cos(xi[1]), xi[0], radius * ops.sin(xi[1])),
+        ((0.0, length), (0.0, math.pi / 2)),
+    )
+
+
+@pytest.mark.parametrize(
+    "surface", [StripGeometry(0.0151, 0.0356, 0.5), AnnulusGeometry(6.0, 10.0), quarter_cylinder()]
+)
+def test_the_jacobian_is_the_derivative_of_the_map(surface):
+    assert surface.check() < 1e-8
+
+
+def test_a_mapped_surface_has_the_analytic_jacobian_and_frame():
+    surface = quarter_cylinder(radius=2.0)
+    xi = np.array([[0.5, 2.0], [0.3, 1.2]])
+    J = surface.jacobian(xi)
+    a = xi[1]
+    assert np.allclose(J[:, 0], [[0, 0], [1, 1], [0, 0]], atol=1e-15)
+    assert np.allclose(J[:, 1], np.vstack([-2 * np.sin(a), 0 * a, 2 * np.cos(a)]), atol=1e-15)
+    _, _, n0 = surface.frame(xi)
+    # the normal of the cylinder x = 2 cos, z = 2 sin, with t1 = +y and t2 along the arc
+    assert np.allclose(np.abs(n0), np.abs(np.vstack([np.cos(a), 0 * a, np.sin(a)])), atol=1e-14)
+
+
+def test_a_map_that_folds_is_refused():
+    folded = MappedSurface(lambda xi, ops: (xi[0], xi[0], 0 * xi[1]), ((0.0, 1.0), (0.0, 1.0)))
+    with pytest.raises(ValueError, match="singular"):
+        folded.check()
+
+
+def test_a_mapped_surface_meshes_and_integrates_to_its_area():
+    """The shell on the quarter cylinder: its reference area is pi r L / 2."""
+    import dolfinx
+
+    from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
+    from tapecoil.models.shell import NaghdiShell, ShellMaterial
+
+    surface = quarter_cylinder(radius=2.0, length=3.0)
+    strip = create_strip_mesh(MPI.COMM_WORLD, surface, MeshResolution(across=6, along=4))
+    shell = NaghdiShell(strip, ShellMaterial(1.0, 0.3, 0.01))
+    area = dolfinx.fem.assemble_scalar(dolfinx.fem.form(shell.jacobian * shell.dx))
+    assert MPI.COMM_WORLD.allreduce(area) == pytest.approx(math.pi * 2.0 * 3.0 / 2, rel=1e-6)
