@@ -28,9 +28,17 @@
 # Run: `make run CMD="python3 demos/tape_fold.py [coarse|default|fine]"` (or with
 # `mpirun -n 2`). ParaView: open `results/tape_fold/fold.bp`, apply *Warp By Vector* with
 # the field `offset` to see the 3D tape.
+#
+# With `TAPECOIL_DEMO_SMOKE=1` (how the tests run it) the same steps are done briefly: the coarse
+# mesh, and the end turned to 1 rad, through the snap (about 0.19 rad) and into the plateau. (A
+# smaller angle is slower: the load steps are fractions of the span, and in smaller steps the
+# snap was passed by relaxation in hundreds of iterations instead of by Newton in 23.) On that
+# mesh the fold of radius R is not resolved, so its checks are not expected to pass.
 
 # %%
 import json
+import math
+import os
 import sys
 from pathlib import Path
 
@@ -46,11 +54,13 @@ from tapecoil.config import MeshConfig, load_config
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.verification.cases import tape_fold
 
-preset = sys.argv[1] if len(sys.argv) > 1 else "default"
+smoke = os.environ.get("TAPECOIL_DEMO_SMOKE") == "1"
+preset = sys.argv[1] if len(sys.argv) > 1 else ("coarse" if smoke else "default")
+final_angle = 1.0 if smoke else math.pi
 config = load_config()
 tape = config.tape
 resolution = MeshResolution.from_config(MeshConfig(preset=preset), tape.L)
-out = Path(config.output.directory) / "tape_fold"
+out = Path(config.output.directory) / ("tape_fold-smoke" if smoke else "tape_fold")
 out.mkdir(parents=True, exist_ok=True)
 rank0 = MPI.COMM_WORLD.rank == 0
 
@@ -59,7 +69,7 @@ rank0 = MPI.COMM_WORLD.rank == 0
 # The end turns from 0 to pi. Every converged step is written for ParaView.
 
 # %%
-result = tape_fold(config, resolution, snapshots=str(out / "fold.bp"))
+result = tape_fold(config, resolution, final_angle=final_angle, snapshots=str(out / "fold.bp"))
 if rank0:
     for check in result.checks:
         error = f"{check.error:.3g}" if check.absolute else f"{check.error:.2%}"

@@ -4,11 +4,13 @@ import csv
 import json
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tapecoil.app.cli import main
+from tapecoil.config import load_config
 
 
 def test_theory_json_numbers(capsys):
@@ -192,3 +194,138 @@ def test_a_stopped_run_resumes_to_the_same_result(tmp_path, phase, after):
                 va = np.array([float(r[key]) for r in ha])
                 vb = np.array([float(r[key]) for r in hb])
                 assert np.allclose(va, vb, rtol=1e-8, atol=1e-14), (name, key)
+
+
+HEAVY = ("dolfinx", "petsc4py", "mpi4py", "ufl")
+
+
+@pytest.mark.parametrize("command", ["theory", "config"])
+def test_theory_and_config_do_not_load_dolfinx(command):
+    """The commands that compute no finite elements start without DOLFINx, PETSc or MPI."""
+    import sys
+
+    code = (
+        "import sys\n"
+        "from tapecoil.app.cli import main\n"
+        f"assert main([{command!r}]) == 0\n"
+        f"loaded = sorted({{m.split('.')[0] for m in sys.modules}} & set({HEAVY!r}))\n"
+        "assert not loaded, loaded\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip()  # the table or the TOML was printed
+    # python3 -m tapecoil: -X importtime lists every module imported, on stderr
+    done = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "tapecoil", command], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    imported = {line.rsplit("|", 1)[-1].strip().split(".")[0] for line in done.stderr.splitlines()}
+    assert "tapecoil" in imported and not imported & set(HEAVY)
+
+
+def _read_msh(path):
+    """Quadrilaterals and physical groups of a .msh file, read by gmsh itself."""
+    import gmsh
+
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        types, tags, _ = gmsh.model.mesh.getElements(2)
+        quads = sum(len(t) for ty, t in zip(types, tags, strict=True) if ty == 3)  # 3: 4-node quad
+        groups = {gmsh.model.getPhysicalName(d, t) for d, t in gmsh.model.getPhysicalGroups()}
+        nodes = gmsh.model.mesh.getNodes()[1].reshape(-1, 3)
+    finally:
+        gmsh.finalize()
+    return quads, groups, nodes
+
+
+def _check_mesh_files(directory, along, across, comm):
+    """The four files of ``tapecoil mesh`` read back: the expected cells, tags and coordinates."""
+    import dolfinx.io
+
+    from tapecoil.geometry.meshes import FREE_END, ROOT, SIDE_NEG, SIDE_POS
+
+    cfg, cells = load_config(), along * across
+    if comm.rank == 0:
+        for name, flat in (("strip-coarse.msh", True), ("strip-coarse-surface.msh", False)):
+            quads, groups, nodes = _read_msh(directory / name)
+            assert quads == cells, name
+            assert groups == {"strip", "root", "free_end", "side_neg", "side_pos"}, name
+            # parameter coordinates lie in the plane; the surface's edges rise to R (1 - cos(alpha / 2))
+            top = cfg.tape.R * (1 - np.cos(cfg.tape.alpha / 2))
+            assert np.max(np.abs(nodes[:, 2])) == pytest.approx(0.0 if flat else top, abs=1e-12), name
+    for name, grid, gdim in (("strip-coarse.xdmf", "strip", 2), ("strip-coarse-surface.xdmf", "surface", 3)):
+        with dolfinx.io.XDMFFile(comm, str(directory / name), "r") as f:
+            mesh = f.read_mesh(name=grid)
+            mesh.topology.create_connectivity(1, 2)
+            facets = f.read_meshtags(mesh, name="facets")
+        assert mesh.geometry.dim == gdim
+        assert mesh.topology.index_map(2).size_global == cells
+        # each facet counted once, on the rank that owns it
+        owned = facets.values[facets.indices < mesh.topology.index_map(1).size_local]
+        counts = [comm.allreduce(int(np.sum(owned == tag))) for tag in (ROOT, FREE_END, SIDE_NEG, SIDE_POS)]
+        assert counts == [across, across, along, along]
+
+
+def test_mesh_command_writes_readable_files(tmp_path, capsys):
+    """tapecoil mesh --preset coarse: the 0.5 m benchmark tape in 40 x 4 cells, four files."""
+    from mpi4py import MPI
+
+    out = tmp_path / "meshes"
+    assert main(["mesh", "--preset", "coarse", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "40 x 4 quadrilaterals" in text and "205 nodes, 160 cells" in text
+    assert "element size 12.5 mm along the tape, 8.895 mm across" in text
+    for name in (
+        "strip-coarse.msh",
+        "strip-coarse.xdmf",
+        "strip-coarse-surface.msh",
+        "strip-coarse-surface.xdmf",
+    ):
+        assert str(out / name) in text
+    _check_mesh_files(out, 40, 4, MPI.COMM_WORLD)
+
+
+def test_mesh_command_takes_the_configuration(tmp_path, capsys):
+    """The configured tape and mesh fields are meshed; the default directory is meshes/ here."""
+    import os
+
+    path = tmp_path / "short.toml"
+    path.write_text("[tape]\nL = 0.1\n[mesh]\npreset = 'coarse'\nelements_across = 3\ngrading = 2.0\n")
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        assert main(["mesh", str(path)]) == 0
+    finally:
+        os.chdir(cwd)
+    text = capsys.readouterr().out
+    assert "8 x 3 quadrilaterals" in text and "24 cells" in text
+    assert "to" in text.split("element size")[1].split("along")[0]  # graded: first to last length
+    assert (tmp_path / "meshes" / "strip-coarse.msh").is_file()
+
+
+def test_mesh_command_refuses_bad_input_before_meshing(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    assert main(["mesh", "--preset", "coarse", "--out", str(blocker / "meshes")]) == 2
+    assert "--out" in capsys.readouterr().err
+    path = tmp_path / "bad.toml"
+    path.write_text("[mesh]\ngrading = 0.5\n")
+    assert main(["mesh", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "mesh.grading" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.mpi
+def test_mesh_command_on_two_ranks(tmp_path, capsys):
+    """Under MPI rank 0 meshes and writes the .msh; the XDMF files are written together."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    out = Path(comm.bcast(str(tmp_path), root=0)) / "meshes"
+    assert main(["mesh", "--preset", "coarse", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert ("205 nodes, 160 cells" in text) == (comm.rank == 0)  # rank 0 prints
+    comm.barrier()
+    _check_mesh_files(out, 40, 4, comm)

@@ -209,7 +209,8 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
 
 def test_along_tape_shift_reproduces_nodes_and_smooth_fields():
     """A whole element's shift returns the nodal values; a smooth field moves to spline accuracy."""
-    from tapecoil.phases.coiling import AlongTape, CoilingModel
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.predictors import AlongTape
 
     model = CoilingModel(short_tape(), MPI.COMM_SELF)
     nodes = model.contact.nodes
@@ -240,7 +241,7 @@ def test_along_tape_shift_reproduces_nodes_and_smooth_fields():
 
 
 def test_predictor_choice_follows_the_element_length():
-    from tapecoil.phases.coiling import choose_predictor
+    from tapecoil.phases.predictors import choose_predictor
 
     r_hub = 0.0127
     assert choose_predictor("auto", 0.004, r_hub) == "shift"  # default mesh

@@ -1,8 +1,8 @@
 """Validation of the coiling run against physics.md (slow: make validate, under mpirun -n 2).
 
 The benchmark tape on the coarse mesh, flattened and coiled by the full 36 rad with the 1 N
-pull. Tolerances are those of issue 4: stored energy 5 %, curvature 5 %, surface stresses 10 %
-(the thesis reached 17 %), coil radius 2 %, turn separation 10 %.
+pull. Tolerances (each measure carries its reason): stored energy 5 %, curvature 5 %, surface
+stresses 10 % (the thesis reached 17 %), coil radius 2 %, turn separation 10 %.
 """
 
 import dataclasses

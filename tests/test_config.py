@@ -20,6 +20,8 @@ def test_toml_round_trip(tmp_path):
     c.tape.L = 0.25
     c.mesh.preset = "coarse"
     c.solver.petsc_options = {"pc_factor_mat_solver_type": "mumps", "snes_monitor": True}
+    c.coiling.petsc_options = {"snes_max_it": 40}
+    c.deployment.petsc_options = {"snes_linesearch_type": "bt", "snes_rtol": 1e-9}
     path = tmp_path / "c.toml"
     path.write_text(to_toml(c))
     assert load_config(path) == c
@@ -54,8 +56,17 @@ def test_integer_accepted_for_float(tmp_path):
         ({"mesh": {"elements_across": 2.5}}, r"mesh\.elements_across must be an integer"),
         ({"deployment": {"rho_inf": 1.5}}, r"deployment\.rho_inf .* must be in \[0, 1\]"),
         ({"deployment": {"dt": 1.0, "t_end": 0.5}}, r"deployment\.dt .* smaller than deployment\.t_end"),
-        ({"solver": {"initial_step": 0.5, "max_step": 0.25}}, r"solver\.min_step <= solver\.initial_step"),
+        # the step sizes are the phases' own, in their units (coiling.max_step, deployment.dt)
+        ({"solver": {"initial_step": 0.05}}, r"unknown key solver\.initial_step"),
+        ({"solver": {"max_step": 0.25}}, r"unknown key solver\.max_step"),
+        ({"solver": {"min_step": 1.0}}, r"solver\.min_step = 1\.0 is out of range: must be in \[0, 1\)"),
+        ({"solver": {"max_cutbacks": -1}}, r"solver\.max_cutbacks .* must be in \[0, 100\]"),
         ({"solver": {"petsc_options": {"ksp_type": [1]}}}, r"solver\.petsc_options\.ksp_type must be"),
+        (
+            {"coiling": {"petsc_options": {"snes_monitor": {}}}},
+            r"coiling\.petsc_options\.snes_monitor must be",
+        ),
+        ({"deployment": {"petsc_options": "snes_monitor"}}, r"deployment\.petsc_options must be a table"),
         ({"hub": {"radius": 1e-4}}, r"hub\.radius .* must exceed twice tape\.h"),
         ({"coiling": {"tension": -1.0}}, r"coiling\.tension .* must be >= 0 \[N\]"),
     ],

@@ -2,7 +2,8 @@
 
 The benchmark tape on the coarse mesh, deployed from the stowed state of the coiling
 validation (results/validate-coil-coarse, coiled first if it is not there) to lambda = 1.
-Tolerances: issue 5, time to lambda = 0.9 within 5 % and the energy balance within 2 %.
+Tolerances (each measure carries its reason): time to lambda = 0.9 within 5 % and the energy
+balance within 2 %.
 
 The reference ODE of physics.md releases mu = D (1 + nu)/R^2 per unit area, the energy of a
 coil of radius R; the benchmark coil (r about 13 mm) stores the plate value w(r), 79 to

@@ -41,7 +41,8 @@ def oscillators(omegas, rho_inf, dt, steps, q0=1.0):
     ti.a_old.x.array[:] = -stiffness.x.array * q0
     dq = ufl.TestFunction(V)
     F = ti.a_m * dq * ufl.dx + ti.force_average(stiffness * q * dq * ufl.dx)
-    solver = SNESSolver(F, ufl.derivative(F, q, ufl.TrialFunction(V)), q, [], rtol=1e-12, atol=1e-300)
+    jacobian = ufl.derivative(F, q, ufl.TrialFunction(V))
+    solver = SNESSolver(F, jacobian, q, [], prefix="test_dynamics_", rtol=1e-12, atol=1e-300)
     ti.set_step(dt)
     out = [q.x.array.copy()]
     energy = [0.5 * stiffness.x.array * q0**2]

@@ -1,6 +1,7 @@
 """gmsh strip and annulus: one surface for parameters and 3D, tags, presets, hub."""
 
 import math
+from pathlib import Path
 
 import dolfinx
 import numpy as np
@@ -11,11 +12,14 @@ from mpi4py import MPI
 from tapecoil.config import MeshConfig, load_config
 from tapecoil.geometry.meshes import (
     FREE_END,
+    PRESETS,
+    PRESETS_FILE,
     ROOT,
     SIDE_NEG,
     SIDE_POS,
     MeshResolution,
     create_strip_mesh,
+    load_presets,
 )
 from tapecoil.geometry.surfaces import AnnulusGeometry, StripGeometry
 
@@ -39,6 +43,90 @@ def test_presets():
     assert coarse.along < 125 < fine.along and coarse.across < 9 < fine.across
     custom = MeshResolution.from_config(MeshConfig(preset="coarse", elements_across=7, element_size=0.01), L)
     assert (custom.across, custom.along) == (7, 50)
+
+
+def test_presets_file():
+    """meshes/presets.toml holds the presets, MeshConfig accepts exactly their names."""
+    import dataclasses
+
+    assert PRESETS == {"coarse": (4, 0.0125), "default": (9, 0.004), "fine": (18, 0.002)}
+    allowed = next(f.metadata["allowed"] for f in dataclasses.fields(MeshConfig) if f.name == "preset")
+    assert tuple(PRESETS) == allowed
+    # in a source tree the package's file is the link to the project's meshes/presets.toml
+    project = Path(__file__).resolve().parents[1] / "meshes" / "presets.toml"
+    if PRESETS_FILE.is_symlink():
+        assert PRESETS_FILE.resolve() == project.resolve()
+    assert load_presets(project) == PRESETS
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "[coarse]\nelements_across = 0\nelement_size = 0.01\n",
+        "[coarse]\nelements_across = 4.5\nelement_size = 0.01\n",
+        "[coarse]\nelements_across = true\nelement_size = 0.01\n",
+        "[coarse]\nelements_across = 4\nelement_size = -0.01\n",
+        "[coarse]\nelements_across = 4\n",
+        "[coarse]\nelements_across = 4\nelement_size = 0.01\ngrading = 2\n",
+        "coarse = 4\n",
+        "[coarse\n",
+    ],
+)
+def test_broken_presets_file_is_refused(tmp_path, text):
+    path = tmp_path / "presets.toml"
+    path.write_text(text)
+    with pytest.raises(RuntimeError, match="presets"):
+        load_presets(path)
+
+
+def test_element_lengths():
+    assert MeshResolution(4, 40).element_lengths(0.5) == pytest.approx((0.0125, 0.0125))
+    first, last = MeshResolution(4, 20, grading=2.0).element_lengths(0.5)
+    assert last / first == pytest.approx(2.0)
+    ratio = 2.0 ** (1 / 19)
+    assert first * sum(ratio**i for i in range(20)) == pytest.approx(0.5)  # they fill the length
+
+
+def test_strip_mesh_written_by_gmsh(tmp_path):
+    """create_strip_mesh(msh=...) writes gmsh's model: the solver's mesh, in parameter coordinates."""
+    import gmsh
+
+    comm = MPI.COMM_WORLD
+    path = Path(comm.bcast(str(tmp_path), root=0)) / "strip.msh"  # rank 0 writes it
+    strip = create_strip_mesh(comm, StripGeometry(0.0151, 0.0356, 0.5), MeshResolution(3, 10), msh=path)
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        x = gmsh.model.mesh.getNodes()[1].reshape(-1, 3)
+    finally:
+        gmsh.finalize()
+    assert len(x) == strip.mesh.geometry.index_map().size_global == 4 * 11
+    assert np.all(x[:, 2] == 0) and np.max(np.abs(x[:, 1])) == pytest.approx(0.0356 / 2, rel=1e-12)
+
+
+@pytest.mark.mpi
+def test_gmsh_failure_reaches_every_rank(tmp_path):
+    """gmsh runs on rank 0 only; its failure is raised on every rank instead of leaving the others
+    waiting for a mesh that never comes."""
+    comm = MPI.COMM_WORLD
+    blocker = Path(comm.bcast(str(tmp_path), root=0)) / "file"
+    if comm.rank == 0:
+        blocker.write_text("a file where a directory should be")
+    comm.barrier()
+    try:
+        create_strip_mesh(
+            comm, StripGeometry(0.0151, 0.0356, 0.5), MeshResolution(2, 4), msh=blocker / "a.msh"
+        )
+        outcome = None
+    except Exception as exc:
+        outcome = str(exc)
+    outcomes = comm.allgather(outcome)  # gathered, so that a rank that went on fails too
+    assert outcomes[0] is not None and "Unable to open file" in outcomes[0]
+    assert outcomes == [outcomes[0]] * comm.size
+    # gmsh is left usable: the next mesh is made as usual
+    strip = create_strip_mesh(comm, StripGeometry(0.0151, 0.0356, 0.5), MeshResolution(2, 4))
+    assert strip.mesh.topology.index_map(2).size_global == 8
 
 
 def test_strip_parameter_domain_and_tags(tape_mesh):

@@ -1,5 +1,7 @@
 """ParaView output: the offset field rebuilds the 3D surface; no NaN is ever written."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -42,6 +44,49 @@ def test_csv(tmp_path):
     assert (tmp_path / "h.csv").read_text().splitlines() == ["step,energy", "1,0.5", "2,0.25"]
     with pytest.raises(NonFiniteStateError):
         write_csv(tmp_path / "n.csv", [{"energy": float("nan")}])
+
+
+def _outcome(call):
+    """None if ``call()`` returns, else the type and message of what it raised."""
+    try:
+        call()
+    except Exception as exc:
+        return f"{type(exc).__name__}: {exc}"
+    return None
+
+
+def test_csv_unwritable_path_is_an_error(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("a file where a directory should be")
+    for comm in (None, MPI.COMM_WORLD):
+        with pytest.raises(OSError):
+            write_csv(blocker / "h.csv", [{"step": 1}], comm)
+
+
+@pytest.mark.mpi
+def test_csv_errors_reach_every_rank(tmp_path):
+    """Rank 0 writes; when it cannot, every rank raises the same error instead of walking on
+    into the next collective operation and waiting there for ever."""
+    comm = MPI.COMM_WORLD
+    directory = Path(comm.bcast(str(tmp_path), root=0))
+    blocker = directory / "file"
+    if comm.rank == 0:
+        blocker.write_text("a file where a directory should be")
+    comm.barrier()
+    rows = [{"step": 1, "energy": 0.5}]
+    for path, rows_, kind in (
+        (blocker / "h.csv", rows, "FileExistsError"),  # mkdir of a directory where a file is
+        (directory / "n.csv", [{"energy": float("nan")}], "NonFiniteStateError"),
+    ):
+        # the outcomes are gathered, not raised at once, so that a rank that did not raise cannot
+        # leave the others waiting: the test fails on every rank instead
+        outcomes = comm.allgather(_outcome(lambda p=path, r=rows_: write_csv(p, r, comm)))
+        assert outcomes[0] is not None and outcomes[0].startswith(kind), outcomes
+        assert outcomes == [outcomes[0]] * comm.size
+    assert not (directory / "n.csv").exists()
+    # and a good history is written once, by rank 0, with every rank returning
+    assert comm.allgather(_outcome(lambda: write_csv(directory / "h.csv", rows, comm))) == [None] * comm.size
+    assert (directory / "h.csv").read_text().splitlines() == ["step,energy", "1,0.5"]
 
 
 def test_render_is_a_picture_of_the_shell(model, tmp_path):

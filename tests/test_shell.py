@@ -160,7 +160,7 @@ def test_continuation_stops_with_the_last_converged_state():
     """Cut-backs exhausted: a clear error naming the last converged load, that state kept."""
     from types import SimpleNamespace
 
-    from tapecoil.config import SolverConfig
+    from tapecoil.config import StepControl
     from tapecoil.core.stepping import Continuation, ContinuationError
 
     state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(3)))
@@ -171,7 +171,9 @@ def test_continuation_stops_with_the_last_converged_state():
         state.x.array[:] = load["t"] if ok else np.nan  # a failed solve leaves garbage behind
         return SimpleNamespace(converged=ok, iterations=3)
 
-    control = SolverConfig(initial_step=0.2, max_step=0.2, max_cutbacks=3)
+    control = StepControl(
+        initial_step=0.2, max_step=0.2, min_step=1e-6, grow=1.5, cutback=0.5, max_cutbacks=3
+    )
     run = Continuation(solve, lambda t: load.update(t=t), state, control)
     with pytest.raises(ContinuationError, match=r"last converged load 0\.5$") as info:
         run.run(0.0, 1.0)

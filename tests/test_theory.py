@@ -182,7 +182,7 @@ def test_fold_moment_and_section(cfg):
     assert th.arc_second_moment(tp.R, tp.alpha, tp.h) == pytest.approx(I_num, rel=1e-9)
 
 
-def test_predictions_cover_the_issue_numbers(cfg):
+def test_predictions_reproduce_the_physics_brief_numbers(cfg):
     p = {x.key: x for x in th.predictions(cfg)}
     assert close(p["T_deploy_hub"].value, 0.443)
     assert close(p["T_deploy_ode"].value, 0.436)

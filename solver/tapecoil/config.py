@@ -149,6 +149,9 @@ class CoilingConfig:
         sense: 'opposite' (the coil's longitudinal curvature opposite in sense to the section's
             transverse curvature: the hub lies on the convex side of the section, as a tape
             measure is wound) or 'equal' (the hub on the concave side) [-].
+        petsc_options: PETSc options without prefix for the coiling's solver (the flattening,
+            the coiling and its relaxation; prefix coil_), over [solver] petsc_options, e.g.
+            {snes_monitor = ""}.
     """
 
     hub_angle: float = param(36.0, "rad", POSITIVE)
@@ -157,6 +160,7 @@ class CoilingConfig:
     predictor: str = param("auto", "", ("auto", "shift", "secant"))
     max_step: float = param(0.0, "rad", Range(0.0, math.pi))
     sense: str = param("opposite", "", ("opposite", "equal"))
+    petsc_options: dict = param({}, "")
 
 
 @dataclass
@@ -179,38 +183,79 @@ class MeshConfig:
 
 @dataclass
 class SolverConfig:
-    """Newton solver and adaptive load stepping.
+    """Newton and the cut-back of failing steps, for every solve of every command.
+
+    The step sizes are each phase's own, in its units: ``coiling.max_step`` [rad] and
+    ``coiling.flatten_steps``, ``deployment.dt`` and ``deployment.max_dt`` [s]; the
+    verification cases step their loads as their references were computed.
 
     Attributes:
         rtol: relative residual tolerance of Newton [-].
-        atol: absolute residual tolerance of Newton [residual units].
+        atol: absolute residual tolerance of Newton [N on displacement dofs, N m on rotations].
         max_newton: Newton iterations before a step counts as failed [-].
-        initial_step: first load step as a fraction of the full load [-].
-        min_step: smallest load step before giving up [-].
-        max_step: largest load step [-].
+        min_step: smallest step before a run gives up, as a fraction of the phase's whole load
+            range: the hub angle, the flattening, deployment.t_end, a verification case's full
+            load [-]. 0: each phase's own (1e-6 of the hub angle but at most 1e-4 rad; 1e-6 of
+            the flattening; 1e-6 of t_end but at most 1e-3 deployment.dt; 1e-4 of the tape
+            fold's end rotation; 1e-6 of the other cases' loads).
         grow: factor by which the step grows after an easy step [-].
         cutback: factor by which the step shrinks after a failed step [-].
-        max_cutbacks: consecutive cut-backs before the run stops [-].
-        petsc_options: extra PETSc options (prefix-free), e.g. {"pc_factor_mat_solver_type" = "mumps"}.
+        max_cutbacks: consecutive cut-backs of a failing step before the run stops or, where
+            the phase can (coiling, tape fold), passes it by pseudo-transient relaxation [-].
+            0: each phase's own (8; the tape fold 4, so that it relaxes early through its snap).
+        petsc_options: PETSc options without prefix for every solver, e.g.
+            {snes_monitor = "", mat_mumps_icntl_14 = 50}; [coiling] and [deployment]
+            petsc_options override them for their phase, the command line overrides both
+            (-coil_snes_monitor, -deploy_..., -verify_<case>_..., the case's dashes as underscores).
     """
 
     rtol: float = param(1e-8, "-", Range(0.0, 1.0, True, True))
     atol: float = param(1e-10, "", POSITIVE)
     max_newton: int = param(25, "-", Range(1, 1000))
-    initial_step: float = param(0.05, "-", Range(0.0, 1.0, True))
-    min_step: float = param(1e-6, "-", Range(0.0, 1.0, True))
-    max_step: float = param(0.25, "-", Range(0.0, 1.0, True))
+    min_step: float = param(0.0, "-", Range(0.0, 1.0, hi_open=True))
     grow: float = param(1.5, "-", Range(1.0, 10.0))
     cutback: float = param(0.5, "-", Range(0.0, 1.0, True, True))
-    max_cutbacks: int = param(8, "-", Range(1, 100))
+    max_cutbacks: int = param(0, "-", Range(0, 100))
     petsc_options: dict = param({}, "")
 
-    def check(self) -> None:
-        if not self.min_step <= self.initial_step <= self.max_step:
-            raise ConfigError(
-                "solver.min_step <= solver.initial_step <= solver.max_step is required "
-                f"(got {self.min_step:g}, {self.initial_step:g}, {self.max_step:g})"
-            )
+    def control(
+        self,
+        initial_step: float,
+        max_step: float,
+        min_step: float,
+        max_cutbacks: int = 8,
+        range_fraction: float = 1.0,
+    ) -> StepControl:
+        """The step control of a phase's continuation; steps are fractions of the span it runs over.
+
+        ``initial_step``, ``max_step``: the phase's step limits. ``min_step``, ``max_cutbacks``:
+        the phase's own, used where this section leaves them at 0. ``range_fraction``: the
+        phase's whole load range over the span, the unit of this section's ``min_step``.
+        """
+        return StepControl(
+            initial_step=initial_step,
+            max_step=max_step,
+            min_step=self.min_step * range_fraction if self.min_step > 0 else min_step,
+            grow=self.grow,
+            cutback=self.cutback,
+            max_cutbacks=self.max_cutbacks or max_cutbacks,
+        )
+
+
+@dataclass(frozen=True)
+class StepControl:
+    """The load stepping of one continuation (:class:`tapecoil.core.stepping.Continuation`).
+
+    Not a configuration section: :meth:`SolverConfig.control` makes it from ``[solver]`` and a
+    phase's step limits. Steps are fractions of the span the continuation runs over [-].
+    """
+
+    initial_step: float
+    max_step: float
+    min_step: float
+    grow: float
+    cutback: float
+    max_cutbacks: int
 
 
 @dataclass
@@ -241,6 +286,8 @@ class DeploymentConfig:
         release_time: time over which the hold on the free end (pull and guide) is released [s].
         rho_inf: high-frequency spectral radius of generalized-alpha [-]; 1 is trapezoidal Newmark.
         lambda_end: deployed fraction at which the run stops early [-].
+        petsc_options: PETSc options without prefix for the deployment's solver (prefix
+            deploy_), over [solver] petsc_options, e.g. {snes_monitor = ""}.
     """
 
     t_end: float = param(0.6, "s", POSITIVE)
@@ -249,6 +296,7 @@ class DeploymentConfig:
     release_time: float = param(2e-3, "s", NON_NEGATIVE)
     rho_inf: float = param(0.5, "-", Range(0.0, 1.0))
     lambda_end: float = param(1.0, "-", Range(0.0, 1.0, True))
+    petsc_options: dict = param({}, "")
 
     def check(self) -> None:
         if self.dt >= self.t_end:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 
 from tapecoil import __version__
@@ -16,11 +17,18 @@ from tapecoil.config import ConfigError, load_config
 
 
 def _rank() -> int:
-    try:
-        from mpi4py import MPI
-    except ImportError:  # the theory report does not need MPI
-        return 0
-    return MPI.COMM_WORLD.rank
+    """This process's MPI rank, without starting MPI for the commands that need none.
+
+    Once a command has loaded MPI, MPI answers; before that (``theory``, ``config``) the launcher's
+    environment does, so that ``mpirun -n 2 tapecoil theory`` still prints one table.
+    """
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None:
+        return mpi.COMM_WORLD.rank
+    for name in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name])
+    return 0
 
 
 def _echo(text: str = "") -> None:
@@ -74,7 +82,8 @@ def cmd_verify(args: argparse.Namespace) -> int:
     import time
 
     config = load_config(args.config)
-    from tapecoil.verification.cases import CASES, run_case
+    from tapecoil.verification import CASES
+    from tapecoil.verification.cases import run_case
 
     names = CASES if args.case == "all" else (args.case,)
     results = []
@@ -85,7 +94,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
         results.append(result)
         if not args.json:
             mesh, wall = result.info.get("mesh", ""), result.info["case_wall_time"]
-            _echo(f"{name} ({args.mesh} mesh, {mesh}, {wall:.1f} s)")
+            _echo(f"{name} ({result.info['preset']} mesh, {mesh}, {wall:.1f} s)")
             for c in result.checks:
                 err = f"{c.error:.2e}" + ("" if c.absolute else " rel")
                 _echo(
@@ -296,6 +305,46 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_mesh(args: argparse.Namespace) -> int:
+    """The configured tape's strip mesh as gmsh and XDMF files, for gmsh and ParaView."""
+    from pathlib import Path
+
+    config = _with_mesh(load_config(args.config), args.preset)  # refused before MPI starts
+    from mpi4py import MPI
+
+    from tapecoil.core.collective import raise_everywhere
+    from tapecoil.geometry.meshes import MeshResolution, write_strip_mesh
+    from tapecoil.geometry.surfaces import StripGeometry
+
+    comm, directory = MPI.COMM_WORLD, Path(args.out)
+    error = None
+    if comm.rank == 0:
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            error = ConfigError(f"--out {directory}: cannot create the directory ({exc.strerror or exc})")
+    raise_everywhere(comm, error)
+    tp, preset = config.tape, config.mesh.preset
+    res = MeshResolution.from_config(config.mesh, tp.L)
+    files = write_strip_mesh(comm, StripGeometry.from_config(config), res, directory, f"strip-{preset}")
+    first, last = res.element_lengths(tp.L)
+    along = f"{first * 1e3:.4g} mm" if res.grading == 1.0 else f"{first * 1e3:.4g} to {last * 1e3:.4g} mm"
+    _echo(
+        f"strip mesh of the tape (L = {tp.L:g} m, arc width {tp.b * 1e3:.4g} mm), preset {preset}: "
+        f"{res.along} x {res.across} quadrilaterals\n"
+        f"  {files.nodes} nodes, {files.cells} cells; element size {along} along the tape, "
+        f"{tp.b / res.across * 1e3:.4g} mm across"
+    )
+    for path, what in (
+        (files.msh, "gmsh, parameter coordinates (xi_1, xi_2): the solver's mesh"),
+        (files.xdmf, "XDMF, the same: mesh 'strip', tags 'facets' and 'cells'"),
+        (files.surface_msh, "gmsh, the 3D mid-surface"),
+        (files.surface_xdmf, "XDMF, the 3D mid-surface: mesh 'surface', tags 'facets' and 'cells'"),
+    ):
+        _echo(f"  {path!s:<{max(len(str(files.surface_xdmf)), 24)}}  {what}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tapecoil", description="Coiling and deployment of tape springs (FEniCSx)."
@@ -308,12 +357,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=cmd_theory)
 
-    from tapecoil.verification.cases import CASES
+    from tapecoil.verification import CASES
 
     p = sub.add_parser("verify", help="run the shell verification cases against their references")
     p.add_argument("case", nargs="?", default="all", choices=(*CASES, "all"))
     p.add_argument("config", nargs="?", help="TOML configuration (the tape cases use its tape)")
-    p.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
+    p.add_argument(
+        "--mesh",
+        choices=("coarse", "default", "fine"),
+        help="mesh preset (default: each case's coarsest that passes: default for tape-fold, else coarse)",
+    )
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=cmd_verify)
 
@@ -361,6 +414,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("directory", help="results directory of tapecoil run, coil or deploy")
     p.set_defaults(func=cmd_report)
 
+    p = sub.add_parser("mesh", help="write the tape's strip mesh (gmsh .msh and XDMF) for gmsh and ParaView")
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
+    p.add_argument("--preset", choices=("coarse", "default", "fine"), help="mesh preset (overrides the file)")
+    p.add_argument("--out", default="meshes", help="directory of the files (default: meshes/ here)")
+    p.set_defaults(func=cmd_mesh)
+
     p = sub.add_parser("config", help="print a configuration as TOML (the defaults if none is given)")
     p.add_argument("config", nargs="?", help="TOML configuration to check and print")
     p.set_defaults(func=cmd_config)
@@ -379,14 +438,108 @@ def cmd_config(args: argparse.Namespace) -> int:
     return 0
 
 
+_PETSC_EPILOG = (
+    "PETSc options for a solver go after tapecoil's own arguments, under the solver's prefix: "
+    "coil_ (flattening and coiling), deploy_ (deployment), verify_<case>_ (the case's dashes as "
+    "underscores), e.g. tapecoil coil --mesh coarse -coil_snes_monitor. They win over the "
+    "configuration's petsc_options tables."
+)
+
+
+def _known_options(parser: argparse.ArgumentParser) -> set[str]:
+    """The option strings of ``parser`` and of its commands' parsers."""
+    known = set(parser._option_string_actions)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                known |= _known_options(sub)
+    return known
+
+
+def _is_value(arg: str) -> bool:
+    if not arg.startswith("-"):
+        return True
+    try:
+        float(arg)
+    except ValueError:
+        return False
+    return True
+
+
+def split_petsc_options(argv: list[str], known: set[str]) -> tuple[list[str], list[str]]:
+    """``argv`` as tapecoil's own arguments and the PETSc options among them.
+
+    A PETSc option is a single dash and a letter (``-coil_snes_monitor``) that tapecoil does not
+    know. As on PETSc's own command line, the argument after it is its value unless it is an
+    option itself: a positional argument of tapecoil after a PETSc option would be taken as
+    the option's value, hence PETSc options go last. Nothing after ``--`` is split off.
+    """
+    ours: list[str] = []
+    petsc: list[str] = []
+    i = 0
+    while i < len(argv):
+        arg = argv[i]
+        if arg == "--":
+            ours.extend(argv[i:])
+            break
+        if len(arg) > 1 and arg[0] == "-" and arg[1].isalpha() and arg.split("=", 1)[0] not in known:
+            petsc.append(arg)
+            if i + 1 < len(argv) and _is_value(argv[i + 1]):
+                petsc.append(argv[i + 1])
+                i += 1
+        else:
+            ours.append(arg)
+        i += 1
+    return ours, petsc
+
+
+def _hand_to_petsc(options: list[str]):
+    """Give the command line's PETSc options to PETSc; returns what takes them back out.
+
+    Before PETSc is loaded they go to its initialisation, as its own command line would (so
+    that -log_view and the like work); once it is loaded (``main`` called in a process that
+    already ran solvers), into its options database, from which they are removed again when
+    the command is done. Every MPI rank has the same command line and does the same.
+    """
+    if not options:
+        return lambda: None
+    if "petsc4py.PETSc" not in sys.modules:
+        import petsc4py
+        from mpi4py import MPI  # noqa: F401  (MPI first, as in every DOLFINx program)
+
+        petsc4py.init([sys.argv[0], *options])
+        return lambda: None
+    from petsc4py import PETSc
+
+    opts = PETSc.Options()
+    before = opts.getAll()
+    opts.insertString(" ".join(f'"{o}"' if any(c.isspace() for c in o) else o for o in options))
+    changed = {k: before.get(k) for k, v in opts.getAll().items() if before.get(k, object()) != v}
+
+    def take_back():
+        for key, value in changed.items():
+            if value is None:
+                opts.delValue(key)
+            else:
+                opts[key] = value
+
+    return take_back
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    parser.epilog = _PETSC_EPILOG
+    argv = sys.argv[1:] if argv is None else list(argv)
+    ours, petsc = split_petsc_options(argv, _known_options(parser))
+    args = parser.parse_args(ours)
+    take_back = _hand_to_petsc(petsc)
     try:
         return args.func(args)
     except ConfigError as exc:
         print(f"tapecoil: configuration error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        take_back()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,15 +1,18 @@
 """A thin PETSc SNES wrapper over DOLFINx assembly, the same on DOLFINx 0.9 to 0.11.
 
-Newton with a line search and a direct solver (MUMPS) by default; any PETSc option can be
-overridden. The wrapper owns its vectors and matrix and assembles the residual with Dirichlet
-conditions applied by lifting, so that a Newton iterate that does not yet satisfy the (changed)
-boundary values is driven onto them: the residual on a constrained dof is x - g.
+Newton with a line search and a direct solver (MUMPS) by default. Each solver has an options
+prefix named by its caller (``coil_``, ``deploy_``, ``verify_rollup_``), as DOLFINx's
+NonlinearProblem has, so that any PETSc option can be set for it on the command line
+(``-coil_snes_monitor``). The wrapper owns its vectors and matrix and assembles the residual
+with Dirichlet conditions applied by lifting, so that a Newton iterate that does not yet satisfy
+the (changed) boundary values is driven onto them: the residual on a constrained dof is x - g.
 """
 
 from __future__ import annotations
 
-import itertools
+import re
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import dolfinx
@@ -27,12 +30,9 @@ DEFAULT_PETSC_OPTIONS = {
     "ksp_type": "preonly",
     "pc_type": "lu",
     "pc_factor_mat_solver_type": "mumps",
-    # MUMPS: more workspace for the indefinite saddle-point systems of the mixed shell
-    "mat_mumps_icntl_14": 200,
-    "mat_mumps_icntl_24": 1,
 }
 
-_prefix_counter = itertools.count()
+_PREFIX = re.compile(r"[A-Za-z][A-Za-z0-9_]*_")
 
 
 @dataclass
@@ -65,11 +65,18 @@ class PointForce:
 class SNESSolver:
     """Newton (PETSc SNES) for F(q) = 0 with Jacobian J and Dirichlet conditions ``bcs``.
 
-    ``options`` override :data:`DEFAULT_PETSC_OPTIONS` (PETSc option names without prefix);
-    ``rtol``, ``atol`` and ``max_it`` set the SNES tolerances.
+    ``prefix``: the PETSc options prefix, named by the caller (letters, digits and underscores,
+    ending in an underscore). ``options`` override :data:`DEFAULT_PETSC_OPTIONS` (PETSc option
+    names without prefix); ``rtol``, ``atol`` and ``max_it`` set the SNES tolerances. Whatever
+    the PETSc options database holds under the prefix (the command line) wins over all of these.
     """
 
-    def __init__(self, F, J, q, bcs, options=None, rtol=1e-8, atol=1e-10, max_it=25):
+    def __init__(self, F, J, q, bcs, *, prefix, options=None, rtol=1e-8, atol=1e-10, max_it=25):
+        if not isinstance(prefix, str) or not _PREFIX.fullmatch(prefix):
+            raise ValueError(
+                f"PETSc options prefix {prefix!r}: letters, digits and underscores, starting with a "
+                "letter and ending in an underscore (e.g. 'coil_')"
+            )
         self.q = q
         self.bcs = list(bcs)
         self.F_form = dolfinx.fem.form(F)
@@ -84,23 +91,47 @@ class SNESSolver:
         self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
 
         comm = V.mesh.comm
+        self.prefix = prefix
+        self.options = {**DEFAULT_PETSC_OPTIONS, **(options or {})}
         self.snes = PETSc.SNES().create(comm)
-        self.prefix = f"tapecoil_{next(_prefix_counter)}_"
-        self.snes.setOptionsPrefix(self.prefix)
-        opts = PETSc.Options()
-        for key, value in {**DEFAULT_PETSC_OPTIONS, **(options or {})}.items():
-            opts[self.prefix + key] = value
+        self.snes.setOptionsPrefix(prefix)
         self.snes.setFunction(self._residual, self.b)
         self.snes.setJacobian(self._jacobian, self.A)
+        # stol stays at PETSc's 1e-8: it is what ends the pseudo-transient relaxation's solves,
+        # whose residual starts near its round-off floor (1e-8 on the coarse coiling), below
+        # rtol times itself and below atol. With stol = 0 the coarse coiling stopped at its
+        # first snap (15.19 rad); its 60 solves ended by the step test all had residuals at
+        # that floor, so no solve ends on a small step with a large residual
         self.snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
         self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
-        self.snes.setFromOptions()
-        self.snes.getKSP().setFromOptions()
-        for key in opts.getAll():  # leave no options of ours behind in the global database
-            if key.startswith(self.prefix):
-                opts.delValue(key)
+        with self._options_in_database():
+            self.snes.setFromOptions()
+            self.snes.getKSP().setFromOptions()
         # a non-finite residual ends the solve as diverged instead of poisoning the state
         self.snes.setErrorIfNotConverged(False)
+
+    @contextmanager
+    def _options_in_database(self):
+        """This solver's options in PETSc's global database while PETSc reads them.
+
+        A key the database already holds (the user's command line) is left alone, so it wins;
+        the keys inserted here are deleted afterwards, so that none reaches the next solver
+        with the same prefix. Solves run inside this too: PETSc reads some options only when it
+        sets up the factorisation at the first solve (MUMPS' ``mat_mumps_icntl_*``), long after
+        setFromOptions. The database is per process; every rank inserts the same keys.
+        """
+        opts = PETSc.Options()
+        inserted = []
+        for key, value in self.options.items():
+            name = self.prefix + key
+            if not opts.hasName(name):
+                opts[name] = value
+                inserted.append(name)
+        try:
+            yield
+        finally:
+            for name in inserted:
+                opts.delValue(name)
 
     def _update_state(self, x) -> None:
         qv = self.q.x.petsc_vec
@@ -135,7 +166,8 @@ class SNESSolver:
         self.norms.clear()
         self.q.x.petsc_vec.copy(self.x)
         t0 = time.perf_counter()
-        self.snes.solve(None, self.x)
+        with self._options_in_database():
+            self.snes.solve(None, self.x)
         self.timings["solve"] += time.perf_counter() - t0
         self.timings["iterations"] += self.snes.getIterationNumber()
         reason = self.snes.getConvergedReason()
@@ -155,19 +187,23 @@ class SNESSolver:
         return {"assembly": assembly / its, "linear_solve": (self.timings["solve"] - assembly) / its}
 
     @classmethod
-    def from_config(cls, F, J, q, bcs, solver_config, defaults=None, **overrides):
+    def from_config(cls, F, J, q, bcs, solver_config, *, prefix, defaults=None, options=None, **overrides):
         """A solver with the tolerances and PETSc options of a :class:`SolverConfig`.
 
-        ``defaults``: PETSc options of the caller that the configuration may override;
-        ``overrides`` win over both.
+        ``prefix``: the PETSc options prefix (see the class). PETSc options, each level over the
+        one before: :data:`DEFAULT_PETSC_OPTIONS`, ``defaults`` (the caller's), the
+        configuration's ``[solver] petsc_options``, ``options`` (the phase's own table, e.g.
+        ``[coiling] petsc_options``), ``overrides`` (what the caller cannot do without); the
+        command line over all of them.
         """
-        options = {**(defaults or {}), **solver_config.petsc_options, **overrides}
+        merged = {**(defaults or {}), **solver_config.petsc_options, **(options or {}), **overrides}
         return cls(
             F,
             J,
             q,
             bcs,
-            options=options,
+            prefix=prefix,
+            options=merged,
             rtol=solver_config.rtol,
             atol=solver_config.atol,
             max_it=solver_config.max_newton,

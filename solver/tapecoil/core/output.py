@@ -18,6 +18,7 @@ import dolfinx.plot
 import numpy as np
 
 from tapecoil.core import compat
+from tapecoil.core.collective import raise_everywhere
 from tapecoil.models.shell import NaghdiShell
 
 
@@ -122,14 +123,25 @@ class ShellWriter:
 
 
 def write_csv(path: str | Path, rows: list[dict], comm=None) -> None:
-    """A history as CSV (rank 0 writes); refuses rows with non-finite numbers."""
-    if comm is not None and comm.rank != 0:
-        return
+    """A history as CSV (rank 0 writes; collective over ``comm``); refuses non-finite numbers.
+
+    Whatever stops rank 0 (a non-finite value, a path it cannot write) is raised on every rank,
+    so that no rank waits in the next collective operation for one that has given up.
+    """
+    error = None
+    if comm is None or comm.rank == 0:
+        try:
+            _write_csv(Path(path), rows)
+        except Exception as exc:
+            error = exc
+    raise_everywhere(comm, error)
+
+
+def _write_csv(path: Path, rows: list[dict]) -> None:
     for row in rows:
         for key, value in row.items():
             if isinstance(value, float) and not np.isfinite(value):
                 raise NonFiniteStateError(f"non-finite {key} in a history row; not written")
-    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else [])

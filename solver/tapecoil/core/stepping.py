@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from tapecoil.config import SolverConfig
+from tapecoil.config import StepControl
 from tapecoil.core.dofs import global_norm
 
 
@@ -65,7 +65,7 @@ class Continuation:
     solve: Callable[[], object]
     set_load: Callable[[float], None]
     state: object  # the dolfinx Function solved for
-    control: SolverConfig
+    control: StepControl
     relaxation: Relaxation | None = None
     on_step: Callable[[StepRecord], None] | None = None
     # predict(t_from, t_to): an initial guess for the solve at t_to from the converged state at t_from
@@ -178,5 +178,3 @@ class Continuation:
             if self.on_step is not None:
                 self.on_step(record)
         return self.history
-
-

@@ -21,20 +21,56 @@ are one and the same surface.
 
 from __future__ import annotations
 
+import sys
+from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from tapecoil.config import MeshConfig
+from tapecoil.core.collective import raise_everywhere
 from tapecoil.geometry.surfaces import StripGeometry, Surface
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10 (conda environments)
+    import tomli as tomllib
 
 # Facet tags of the strip's edges, and the cell tag of the strip.
 STRIP = 1
 ROOT, FREE_END, SIDE_NEG, SIDE_POS = 1, 2, 3, 4
 
-# Preset mesh resolutions: (elements across the width, element length along the tape [m]).
-# 'default' is about the thesis's 4 mm elements with 9 across (Sec. 3.1).
-PRESETS = {"coarse": (4, 0.0125), "default": (9, 0.004), "fine": (18, 0.002)}
+# The preset mesh resolutions are kept in meshes/presets.toml at the top of the project, where
+# they are read and changed; this package reaches it through the link presets.toml beside this
+# module (installed as package data, a copy of the file).
+PRESETS_FILE = Path(__file__).with_name("presets.toml")
+
+
+def load_presets(path: str | Path = PRESETS_FILE) -> dict[str, tuple[int, float]]:
+    """Mesh presets: name -> (elements across the width, element length along the tape [m])."""
+    path = Path(path)
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise RuntimeError(f"cannot read the mesh presets {path}: {exc}") from None
+    presets = {}
+    for name, table in data.items():
+        ok = isinstance(table, dict) and set(table) == {"elements_across", "element_size"}
+        if ok:  # type() rather than isinstance(): TOML's true is no element count
+            across, size = table["elements_across"], table["element_size"]
+            ok = type(across) is int and across > 0 and type(size) in (int, float) and size > 0
+        if not ok:
+            raise RuntimeError(
+                f"{path}: [{name}] must hold exactly elements_across (an integer > 0) and "
+                f"element_size (a length > 0 [m]); got {table!r}"
+            )
+        presets[name] = (across, float(size))
+    return presets
+
+
+PRESETS = load_presets()
 
 
 @dataclass(frozen=True)
@@ -51,6 +87,12 @@ class MeshResolution:
         across = mesh.elements_across or across
         size = mesh.element_size or size
         return cls(across=across, along=max(1, round(length / size)), grading=mesh.grading)
+
+    def element_lengths(self, length: float) -> tuple[float, float]:
+        """Lengths [m] of the first (root) and last (free end) elements along a strip of ``length``."""
+        ratio = _progression(self.along, self.grading)
+        first = length / self.along if ratio == 1.0 else length * (ratio - 1) / (ratio**self.along - 1)
+        return first, first * ratio ** (self.along - 1)
 
 
 def _progression(n: int, grading: float) -> float:
@@ -164,14 +206,14 @@ class StripMesh:
     resolution: MeshResolution
 
 
-def create_strip_mesh(comm, geom: Surface, res: MeshResolution, rank: int = 0) -> StripMesh:
-    """Mesh a surface with gmsh on ``rank`` and distribute it over ``comm`` (collective).
+@contextmanager
+def _gmsh_model(comm, geom: Surface, res: MeshResolution, rank: int, msh: str | Path | None = None):
+    """gmsh's model of ``geom``, meshed on ``rank`` (and written to ``msh``), removed on leaving.
 
-    The DOLFINx mesh lives in parameter coordinates; ``geom.phi0`` maps it to 3D.
+    A failure on ``rank`` (gmsh, or a file it cannot write) is raised on every rank before any
+    of them goes on to distribute the mesh, where the others would wait for it for ever.
     """
     import gmsh
-
-    from tapecoil.core.compat import model_to_mesh
 
     initialized = gmsh.isInitialized()
     if not initialized:
@@ -179,14 +221,108 @@ def create_strip_mesh(comm, geom: Surface, res: MeshResolution, rank: int = 0) -
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("tapecoil-strip")
-        if comm.rank == rank:
-            geom.build_gmsh(res)
-        mesh, cell_tags, facet_tags = model_to_mesh(gmsh.model, comm, rank, gdim=2)
-        gmsh.model.remove()
+        try:
+            error = None
+            if comm.rank == rank:
+                try:
+                    geom.build_gmsh(res)
+                    if msh is not None:
+                        gmsh.write(str(msh))
+                except Exception as exc:
+                    error = exc
+            raise_everywhere(comm, error, rank)
+            yield gmsh.model
+        finally:
+            gmsh.model.remove()
     finally:
         if not initialized:
             gmsh.finalize()
+
+
+def create_strip_mesh(
+    comm, geom: Surface, res: MeshResolution, rank: int = 0, msh: str | Path | None = None
+) -> StripMesh:
+    """Mesh a surface with gmsh on ``rank`` and distribute it over ``comm`` (collective).
+
+    The DOLFINx mesh lives in parameter coordinates; ``geom.phi0`` maps it to 3D. ``msh``: also
+    write gmsh's model there (its nodes in parameter coordinates, the physical groups as tags).
+    """
+    from tapecoil.core.compat import model_to_mesh
+
+    with _gmsh_model(comm, geom, res, rank, msh) as model:
+        mesh, cell_tags, facet_tags = model_to_mesh(model, comm, rank, gdim=2)
     mesh.name = "strip"
     return StripMesh(mesh, cell_tags, facet_tags, geom, res)
 
 
+@dataclass
+class MeshFiles:
+    """What :func:`write_strip_mesh` wrote, and the size of the mesh."""
+
+    msh: Path  # gmsh, nodes in parameter coordinates (the solver's mesh)
+    xdmf: Path  # DOLFINx: that mesh, 'strip', with its tags 'facets' and 'cells'
+    surface_msh: Path  # gmsh, the same cells with their nodes on the 3D mid-surface
+    surface_xdmf: Path  # DOLFINx: the 3D mesh, 'surface', with its tags 'facets' and 'cells'
+    nodes: int
+    cells: int
+
+
+def write_strip_mesh(
+    comm, geom: Surface, res: MeshResolution, directory: str | Path, name: str, rank: int = 0
+) -> MeshFiles:
+    """Write the mesh the solver builds for ``geom`` at ``res`` into ``directory`` (collective).
+
+    ``<name>.msh`` (gmsh 4.1, nodes in parameter coordinates as the solver uses them) and
+    ``<name>.xdmf`` (the DOLFINx mesh on the parameter domain with its facet and cell tags); then
+    ``<name>-surface.msh`` and ``<name>-surface.xdmf``, the same cells with their nodes mapped by
+    phi0 to the 3D mid-surface, to look at. ``directory`` must exist.
+    """
+    import dolfinx.io
+    import gmsh
+
+    from tapecoil.core.compat import model_to_mesh
+
+    directory = Path(directory)
+    msh, xdmf, surface_msh, surface_xdmf = (
+        directory / f"{name}{end}" for end in (".msh", ".xdmf", "-surface.msh", "-surface.xdmf")
+    )
+    with _gmsh_model(comm, geom, res, rank, msh) as model:
+        strip = model_to_mesh(model, comm, rank, gdim=2)
+        error = None
+        if comm.rank == rank:
+            try:
+                _to_surface_coordinates(geom)
+                gmsh.write(str(surface_msh))
+            except Exception as exc:
+                error = exc
+        raise_everywhere(comm, error, rank)
+        surface = model_to_mesh(model, comm, rank, gdim=3)
+    for path, grid, (mesh, cell_tags, facet_tags) in (
+        (xdmf, "strip", strip),
+        (surface_xdmf, "surface", surface),
+    ):
+        mesh.name, facet_tags.name, cell_tags.name = grid, "facets", "cells"
+        mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
+        with dolfinx.io.XDMFFile(comm, str(path), "w") as f:
+            f.write_mesh(mesh)
+            for tags in (facet_tags, cell_tags):
+                f.write_meshtags(tags, mesh.geometry, f"/Xdmf/Domain/Grid[@Name='{grid}']/Geometry")
+    mesh = strip[0]
+    return MeshFiles(
+        msh,
+        xdmf,
+        surface_msh,
+        surface_xdmf,
+        nodes=mesh.geometry.index_map().size_global,
+        cells=mesh.topology.index_map(mesh.topology.dim).size_global,
+    )
+
+
+def _to_surface_coordinates(geom: Surface) -> None:
+    """Move every node of the current gmsh mesh from parameter coordinates to phi0 (3D)."""
+    import gmsh
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    X = geom.phi0(coords.reshape(-1, 3).T)
+    for tag, point in zip(tags, X.T, strict=True):
+        gmsh.model.mesh.setNode(int(tag), [float(c) for c in point], [])

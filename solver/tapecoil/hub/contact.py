@@ -43,6 +43,7 @@ import dolfinx
 import numpy as np
 import ufl
 
+from tapecoil.core.smoothing import smoothstep, smoothstep_ufl
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, Nodes
 
@@ -50,11 +51,6 @@ from tapecoil.models.shell import NaghdiShell, Nodes
 def default_penalty(E: float, h: float, element_length: float) -> float:
     """Penalty stiffness per unit area [N/m^3]: element contact stiffness E h / 100."""
     return 0.01 * E * h / element_length**2
-
-
-def _smoothstep(x):
-    s = ufl.min_value(ufl.max_value(x, 0.0), 1.0)
-    return s * s * (3.0 - 2.0 * s)
 
 
 class CoilContact:
@@ -93,7 +89,7 @@ class CoilContact:
         face = self._face(model.phi, model.d)
         self.radius = ufl.sqrt(face[0] ** 2 + face[2] ** 2)
         steps = sum(
-            _smoothstep((self.psi - 2 * math.pi * k) / ramp_width + 1.0) for k in range(1, max_turns + 1)
+            smoothstep_ufl((self.psi - 2 * math.pi * k) / ramp_width + 1.0) for k in range(1, max_turns + 1)
         )
         self.obstacle = r_hub + h * steps
         self.penetration = self._bracket(self.obstacle - self.radius)
@@ -154,8 +150,8 @@ class CoilContact:
     def obstacle_radius(self, psi: np.ndarray) -> np.ndarray:
         """The staircase r_obs(psi) [m] in numpy (as in the forms)."""
         k = np.arange(1, self.max_turns + 1)[:, None]
-        s = np.clip((psi[None, :] - 2 * math.pi * k) / self.ramp_width + 1.0, 0.0, 1.0)
-        return self.r_hub + self.h * np.sum(s * s * (3.0 - 2.0 * s), axis=0)
+        ramps = smoothstep((psi[None, :] - 2 * math.pi * k) / self.ramp_width + 1.0)
+        return self.r_hub + self.h * np.sum(ramps, axis=0)
 
     def polar(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distance from the axis and swept angle (:meth:`HubFrame.polar`) of points (3, n)."""

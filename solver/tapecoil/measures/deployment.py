@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
+from mpi4py import MPI
 
 from tapecoil import theory
 from tapecoil.measures.measure import Measure
@@ -122,3 +124,47 @@ def deployment_measures(config, history: list[dict]) -> dict:
             absolute=True,
         ).to_dict(),
     }
+
+
+def lift_off(tape, gap_factor: float) -> dict[str, float]:
+    """The coiled length and the deployed fraction lambda (collective).
+
+    The lift-off point is the last point of the centre line, counted from the root, whose
+    inner face lies within ``gap_factor`` h of its obstacle (the turn beneath or the
+    hub). The last such point, not the first beyond it: after release the turns inside the
+    coil rattle and open by a few h here and there, and the tape bridges the climbs over the
+    root step; neither is unspooling. The coiled length is the
+    material coordinate where the gap crosses that value, less the distance
+    sqrt((r + G)^2 - r^2) over which a straight tape leaving the coil tangentially stays
+    within G of it (r the obstacle radius there, G the gap), so that
+
+        lambda = 1 - coiled length / L
+
+    is 1 when the tape has unwound down to the root.
+    """
+    c, tp = tape.contact, tape.config.tape
+    G = gap_factor * tp.h
+    nodes = c.nodes
+    n_owned = nodes.space.dofmap.index_map.size_local
+    q = tape.model.q.x.array
+    face = nodes.positions(q) + c.face_offset * nodes.directors(q)
+    obstacle = c.obstacle_radius(c.psi.x.array)
+    gap = c.polar(face)[0] - obstacle
+    xi = nodes.xi[:, :n_owned]
+    distance = np.abs(xi[1])
+    local_min = distance.min() if distance.size else np.inf
+    centre = distance <= tape.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * tp.b
+    columns = (xi[0], gap[:n_owned], obstacle[:n_owned])
+    rows = np.vstack(tape.comm.allgather(np.column_stack([col[centre] for col in columns])))
+    s, g, r = rows[np.argsort(rows[:, 0])].T
+    on = np.nonzero(g <= G)[0]
+    if len(on) == 0:
+        coiled = 0.0
+    elif on[-1] == len(s) - 1:
+        coiled = float(s[-1])
+    else:
+        i = on[-1]
+        w = (G - g[i]) / (g[i + 1] - g[i])
+        tangent = math.sqrt((r[i] + G) ** 2 - r[i] ** 2)
+        coiled = max(float(s[i] + w * (s[i + 1] - s[i])) - tangent, 0.0)
+    return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}

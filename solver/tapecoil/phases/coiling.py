@@ -1,6 +1,6 @@
 """Quasi-static coiling of a tape spring onto a rotating hub, as in the thesis's benchmark run.
 
-The procedure mirrors the physical one (issue 4):
+The procedure mirrors the physical one (the thesis's benchmark run, physics brief Sec. 1):
 
 1. Flattening: the root edge, attached to the hub, is driven from the tape's curved section to
    the flat section on the hub's top generator (curvature (1 - f)/R, f from 0 to 1) while the
@@ -16,7 +16,7 @@ Each step starts from a predictor: material already on the coil turns rigidly wi
 rest (ploy region and free part) takes the state of the material that was a wound length
 ds = r dtheta further back along the tape (the "shift": steady coiling looks the same in the lab
 frame from step to step), or, on meshes too coarse to interpolate along the tape, the secant
-extrapolation of the last two converged states. See :meth:`CoilingModel.predict`.
+extrapolation of the last two converged states (:mod:`tapecoil.phases.predictors`).
 
 All quantities are SI. Sign conventions: the hub angle is positive in the coiling sense (the root
 moves from the generator it touches towards -x; :class:`~tapecoil.hub.frame.HubFrame` places and
@@ -27,7 +27,6 @@ coiling positive. The measures report it as a magnitude.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -38,7 +37,6 @@ import dolfinx
 import numpy as np
 import ufl
 from mpi4py import MPI
-from scipy.interpolate import CubicSpline
 
 from tapecoil.config import Config
 from tapecoil.core import checkpoint
@@ -49,70 +47,12 @@ from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation, 
 from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
 from tapecoil.measures.coiling import coil_measures, coiled_cells, ploy_measure
 from tapecoil.models.edges import facet_condition
-from tapecoil.models.shell import Nodes
+from tapecoil.phases.predictors import CoilingPredictor, choose_predictor
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 # the pull at the free end rises with the flattening; the guide line is the hub's top tangent
 _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
-
-
-def _smoothstep(x: np.ndarray) -> np.ndarray:
-    s = np.clip(x, 0.0, 1.0)
-    return s * s * (3.0 - 2.0 * s)
-
-
-def choose_predictor(setting: str, element_length: float, r_hub: float) -> str:
-    """The predictor of a run: the setting, or for "auto" the shift where the mesh resolves the coil.
-
-    The shift interpolates the state along the tape, which needs elements short against the
-    turn they are wound into: measured on the benchmark (36 rad, 2 ranks, each predictor with
-    its own largest step), the default mesh (4 mm elements, 0.31 of the hub radius) took 442
-    Newton iterations with the shift against 1,427 with the secant; the coarse mesh (12.5 mm,
-    0.98 of the hub radius) 6,745 against 4,266. "auto" takes the shift up to elements of half
-    the hub radius.
-    """
-    if setting != "auto":
-        return setting
-    return "shift" if element_length <= 0.5 * r_hub else "secant"
-
-
-class AlongTape:
-    """Values of the nodal state at points moved along the tape (xi_1), on every rank.
-
-    The Q2 nodes lie on lines of constant xi_2 running the length of the tape. Each rank gathers
-    the owned nodes' values (five per node: the whole state is some ten thousand numbers) and
-    interpolates every line with a cubic spline through its nodes, so no rank needs more than its
-    own nodes and every rank gets the same value at a shared node. A shift by a whole element
-    reproduces the nodal values exactly.
-    """
-
-    def __init__(self, nodes: Nodes, comm):
-        self.nodes, self.comm = nodes, comm
-        self.n_owned = nodes.space.dofmap.index_map.size_local
-        xi = np.hstack(comm.allgather(nodes.xi[:, : self.n_owned]))
-        # lines: clusters of equal xi_2 (up to round-off), far apart compared with round-off
-        levels = np.sort(xi[1])
-        gap = 1e-9 * float(np.ptp(levels))
-        breaks = levels[np.nonzero(np.diff(levels) > gap)[0] + 1]
-        line_global = np.searchsorted(breaks, xi[1] + gap, side="right")
-        line_local = np.searchsorted(breaks, nodes.xi[1] + gap, side="right")
-        self.lines = []
-        for k in range(len(breaks) + 1):
-            members = np.nonzero(line_global == k)[0]
-            members = members[np.argsort(xi[0, members])]
-            self.lines.append((members, xi[0, members], np.nonzero(line_local == k)[0]))
-
-    def values_at(self, q: np.ndarray, shift: float) -> np.ndarray:
-        """(n, 5) array: u and theta at each local node's xi_1 + ``shift``, from the W-dof array q."""
-        nodes, n = self.nodes, self.n_owned
-        owned = np.column_stack([q[nodes.u_dofs[:n]], q[nodes.theta_dofs[:n]]])
-        values = np.vstack(self.comm.allgather(owned))
-        out = np.empty((nodes.xi.shape[1], values.shape[1]))
-        for members, xi1, local in self.lines:
-            spline = CubicSpline(xi1, values[members], axis=0)
-            out[local] = spline(nodes.xi[0, local] + shift)
-        return out
 
 
 class CoilingModel:
@@ -165,12 +105,18 @@ class CoilingModel:
         # Jacobian at the stowed state 0.19 s against 0.28 s; coarse run on 2 ranks 178 s
         # against 198 s, with the same results
         self.solver = SNESSolver.from_config(
-            F, model.jacobian_form(F), model.q, bcs, config.solver, defaults={"pc_type": "cholesky"}
+            F,
+            model.jacobian_form(F),
+            model.q,
+            bcs,
+            config.solver,
+            prefix="coil_",
+            defaults={"pc_type": "cholesky"},
+            options=config.coiling.petsc_options,
         )
         self._reaction_form = None
-        self._converged: list[tuple[float, np.ndarray]] = []
         self.predictor = choose_predictor(config.coiling.predictor, self.element_length, tape.r_hub)
-        self._along_tape = AlongTape(self.contact.nodes, comm) if self.predictor == "shift" else None
+        self.predictions = CoilingPredictor(tape, self.predictor, comm)
 
     # -- loading --------------------------------------------------------------------------
     def set_flattening(self, f: float) -> None:
@@ -181,58 +127,13 @@ class CoilingModel:
         self.root.set(1.0, angle)
 
     def predict(self, angle_from: float, angle_to: float) -> None:
-        """Initial guess at ``angle_to`` from the converged states at ``angle_from`` and before.
-
-        Material already on the coil (winding angle more than a radian behind the tangent point)
-        turns rigidly with the hub. Near the tangent point and beyond, coiling is steady in the
-        lab frame: the ploy region stays where it is while the tape runs through it, the free
-        part slides along the guide. So with ``predictor = "shift"`` every such point takes the
-        state of the material ds = r dtheta further back along the tape (r the radius of the turn
-        being wound), with u_x lowered by ds; the two are blended over the last radian before the
-        tangent point, where both hold. With ``"secant"`` that part is instead extrapolated from
-        the last two converged states, which gets the ploy region wrong by about r dtheta^2 / 2
-        (measurements in docs/coiling.md).
-        """
-        q = self.model.q.x.array
-        current = q.copy()
-        dtheta = angle_to - angle_from
-        c = self.contact
-        nodes = c.nodes
-        if self.predictor == "shift":
-            turn_radius = float(c.obstacle_radius(np.array([angle_from]))[0]) + 0.5 * c.h
-            ds = turn_radius * dtheta
-            shifted = self._along_tape.values_at(current, -ds)
-            q[nodes.u_dofs] = shifted[:, :3] - np.array([ds, 0.0, 0.0])
-            q[nodes.theta_dofs] = shifted[:, 3:]
-        else:
-            last = self._converged[-2] if len(self._converged) == 2 else None
-            if last is not None and angle_from - last[0] > 0:
-                q += (current - last[1]) * (dtheta / (angle_from - last[0]))
-        w = _smoothstep(angle_from - c.psi.x.array)[:, None]
-        x = nodes.positions(current)
-        turned = self.frame.turn_points(x, dtheta) - nodes.reference
-        q[nodes.u_dofs] = w * turned.T + (1 - w) * q[nodes.u_dofs]
-        # a turn about the width axis changes theta_1 alone
-        rotated = current[nodes.theta_dofs[:, 1]] + self.frame.director_angle_change(dtheta)
-        q[nodes.theta_dofs[:, 1]] = w[:, 0] * rotated + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 1]]
-        if self.predictor == "shift":
-            kept = current[nodes.theta_dofs[:, 0]]
-            q[nodes.theta_dofs[:, 0]] = w[:, 0] * kept + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 0]]
+        """The state's initial guess at ``angle_to`` (:class:`CoilingPredictor`)."""
+        self.predictions.predict(self.model.q.x.array, angle_from, angle_to)
 
     def update(self, angle: float) -> None:
-        """After a converged step: winding angles from the new state; keep it for the secant."""
+        """After a converged step: winding angles from the new state; the predictor remembers it."""
         self.contact.update(angle)
-        self._converged = [*self._converged[-1:], (angle, self.model.q.x.array.copy())]
-
-    def previous_converged(self) -> tuple[float, np.ndarray] | None:
-        """(hub angle, state) of the converged step before the current one, if the secant uses it."""
-        if self.predictor != "secant" or len(self._converged) < 2:
-            return None
-        return self._converged[-2]
-
-    def set_previous_converged(self, angle: float, state: np.ndarray) -> None:
-        """Restore the secant's memory of the step before the current one (a restart)."""
-        self._converged = [(angle, state.copy())]
+        self.predictions.remember(angle, self.model.q.x.array)
 
     def end_slide(self) -> float:
         """Mean displacement of the free end along the guide (+x) [m]."""
@@ -305,7 +206,7 @@ class CoilingRun:
 
     def restart_state(self) -> dict:
         """What, besides the model's state, the stepping needs to go on as if never stopped."""
-        previous = self.m.previous_converged()
+        previous = self.m.predictions.previous_converged()
         return {
             "next_step": self.next_step,
             "last_potential": self._last_potential,
@@ -387,7 +288,7 @@ class CoilingRun:
     def flatten(self) -> None:
         m = self.m
         steps = m.config.coiling.flatten_steps
-        control = dataclasses.replace(m.config.solver, initial_step=1.0 / steps, max_step=1.0 / steps)
+        control = m.config.solver.control(initial_step=1.0 / steps, max_step=1.0 / steps, min_step=1e-6)
         cont = self._continuation(m.set_flattening, control)
         cont.on_step = lambda step: self._row("flatten", step.load, step)
         cont.run(0.0, 1.0)
@@ -407,12 +308,12 @@ class CoilingRun:
         m = self.m
         span = final_angle - start_angle
         # the step limits in radians, as fractions of the span the continuation works on
-        base = m.config.solver
-        control = dataclasses.replace(
-            base,
+        hub_angle = m.config.coiling.hub_angle
+        control = m.config.solver.control(
             initial_step=min(min(0.05, self.max_step) / span, 1.0),
             max_step=min(self.max_step / span, 1.0),
-            min_step=min(base.min_step * m.config.coiling.hub_angle, 1e-4) / span,
+            min_step=min(1e-6 * hub_angle, 1e-4) / span,
+            range_fraction=hub_angle / span,  # [solver] min_step: a fraction of the hub angle
         )
 
         def converged(step):
@@ -444,7 +345,7 @@ def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict) -> None:
     for the secant predictor, the previous converged state; ``meta`` holds the hub angle, the
     tension and the stepping's restart state."""
     extra = {}
-    previous = model.previous_converged()
+    previous = model.predictions.previous_converged()
     if previous is not None:
         state = dolfinx.fem.Function(model.model.W)
         state.x.array[:] = previous[1]
@@ -462,7 +363,7 @@ def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tu
         checkpoint.read_functions(path, previous)
         state = dolfinx.fem.Function(model.model.W)
         checkpoint.set_state(state, previous, "previous_")
-        model.set_previous_converged(previous_angle, state.x.array)
+        model.predictions.set_previous_converged(previous_angle, state.x.array)
     model.tension.value = meta["tension"]
     return model, meta
 

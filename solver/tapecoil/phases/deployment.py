@@ -14,13 +14,12 @@ written with UFL's automatic differentiation of d(theta). Time stepping is gener
 (:mod:`tapecoil.core.timeint`) with adaptive steps and the cut-back logic of the load stepping
 (:class:`tapecoil.core.stepping.Continuation`).
 
-The deployed fraction lambda is measured from the geometry (see :meth:`DeploymentModel.lift_off`).
+The deployed fraction lambda is measured from the geometry
+(:func:`tapecoil.measures.deployment.lift_off`).
 """
 
 from __future__ import annotations
 
-import dataclasses
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,12 +35,13 @@ from tapecoil.config import Config
 from tapecoil.core import checkpoint, compat
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, global_size
-from tapecoil.core.newton import PointForce, SNESSolver
+from tapecoil.core.newton import SNESSolver
 from tapecoil.core.stepping import Continuation, ContinuationError, StepRecord
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
-from tapecoil.measures.deployment import deployment_measures
+from tapecoil.measures.deployment import deployment_measures, lift_off
 from tapecoil.models.shell import director_from_angles
+from tapecoil.phases.release import EndHold, split_state
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
@@ -58,18 +58,6 @@ def director_rates(model, theta, theta_dot, theta_ddot=None):
     i, j, k = ufl.indices(3)
     centripetal = ufl.as_vector(D2d[i, j, k] * theta_dot[j] * theta_dot[k], i)
     return Dd, d_dot, ufl.dot(Dd, theta_ddot) + centripetal
-
-
-@dataclass
-class _Magnitude:
-    """A mutable ``value`` (an array here) for :class:`PointForce`."""
-
-    value: np.ndarray
-
-
-def _parts(expr):
-    """(u, theta) parts of a state-shaped expression of the mixed space (3 + 2 components)."""
-    return ufl.as_vector([expr[i] for i in range(3)]), ufl.as_vector([expr[3], expr[4]])
 
 
 class DeploymentModel:
@@ -103,22 +91,10 @@ class DeploymentModel:
         self.rotary = rho * h**3 / 12  # kg
         self.energy = model.strain_energy + c.contact.energy
 
-        # the hold on the free end (the guide and the pull of the coiling run), released over
-        # release_time: a stiff spring to the stowed end plus the dead forces that held it there,
-        # both scaled by hold_factor, which falls from 1 to 0 (see hold_at)
-        self.release_time = cfg.deployment.release_time
-        self.hold_factor = dolfinx.fem.Constant(model.mesh, 1.0)
-        self.stowed = dolfinx.fem.Function(model.W, name="stowed_state")
-        self.stowed.x.array[:] = model.q.x.array
-        u0, theta0 = _parts(self.stowed)
-        u, theta = _parts(model.q)
-        du, dtheta = _parts(model.dq)
-        ell = c.element_length
-        k_hold = tp.E * tp.h / ell  # per unit edge length: an element's membrane stiffness
-        spring = k_hold * (ufl.dot(u - u0, du) + ell**2 * ufl.dot(theta - theta0, dtheta))
-        # applied at the level q_f of the scheme; its work over a step is taken there too
-        hold = ti.at_midpoint(self.hold_factor * spring * model.ds(FREE_END))
-        self._hold_form = dolfinx.fem.form(hold)
+        # the hold on the free end (the guide and the pull of the coiling run), let go over
+        # release_time (phases.release)
+        self.hold = EndHold(c, ti, cfg.deployment.release_time)
+        hold = self.hold.form
 
         self.scheme = "conserving" if self.rho_inf == 1.0 else "alpha"
         if self.scheme == "alpha":
@@ -127,13 +103,19 @@ class DeploymentModel:
         else:
             F, J, kinetic = self._conserving_forms(hold)
             options = {}
-        self.solver = SNESSolver.from_config(F, J, model.q, self.bcs, cfg.solver, defaults=options)
+        self.solver = SNESSolver.from_config(
+            F,
+            J,
+            model.q,
+            self.bcs,
+            cfg.solver,
+            prefix="deploy_",
+            defaults=options,
+            options=cfg.deployment.petsc_options,
+        )
         self.kinetic_form = dolfinx.fem.form(kinetic * model.jacobian * model.dx)
         self._internal_form = ufl.derivative(self.energy, model.q, model.dq)
-        self._end_dofs = self._owned_edge_dofs(FREE_END)
-        self._dead = _Magnitude(np.zeros(len(self._end_dofs)))
-        self.solver.point_forces.append(PointForce(self._end_dofs, self._dead))
-        self._dead_full = self._end_internal_force()
+        self.solver.point_forces.append(self.hold.point_force())
         self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
 
     def _alpha_forms(self, hold):
@@ -144,10 +126,10 @@ class DeploymentModel:
         """
         model, ti = self.model, self.integrator
         dA = model.jacobian
-        du, dtheta = _parts(model.dq)
-        a_u, a_theta = _parts(ti.a_m)
-        _, v_theta = _parts(ti.v_f)
-        _, theta_f = _parts(ti.q_f)
+        du, dtheta = split_state(model.dq)
+        a_u, a_theta = split_state(ti.a_m)
+        _, v_theta = split_state(ti.v_f)
+        _, theta_f = split_state(ti.q_f)
         Dd_f, _, d_ddot = director_rates(model, theta_f, v_theta, a_theta)
         translational = self.translational * ufl.dot(a_u, du) * dA * model.dx
         rotary = self.rotary * ufl.dot(d_ddot, ufl.dot(Dd_f, dtheta)) * dA * model.dx
@@ -161,7 +143,7 @@ class DeploymentModel:
         # factorises with LDL^T; the residual, and with it the solution, is exact.
         trial = ufl.TrialFunction(model.W)
         p = ti.parameters
-        _, dtheta_trial = _parts(trial)
+        _, dtheta_trial = split_state(trial)
         rotary_mass = (1 - p.alpha_m) / (p.beta * ti.dt**2) * self.rotary
         rotary_mass = (
             rotary_mass * ufl.dot(ufl.dot(Dd_f, dtheta_trial), ufl.dot(Dd_f, dtheta)) * dA * model.dx
@@ -169,7 +151,7 @@ class DeploymentModel:
         J = ufl.derivative(F - rotary, model.q, trial) + rotary_mass
 
         # kinetic energy of the current state (velocity: the integrator's latest)
-        v_u, v_theta = _parts(ti.v_old)
+        v_u, v_theta = split_state(ti.v_old)
         _, d_dot, _ = director_rates(model, model.theta, v_theta)
         kinetic = 0.5 * (self.translational * ufl.dot(v_u, v_u) + self.rotary * ufl.dot(d_dot, d_dot))
         return F, J, kinetic
@@ -197,15 +179,15 @@ class DeploymentModel:
         dd = model.director_variation(ti.q_old)
         rate = 2 * (model.d - d_old) / ti.dt - self.director_rate
         self._new_director_rate = dolfinx.fem.Expression(rate, compat.interpolation_points(space))
-        du, _ = _parts(model.dq)
-        a_u, _ = _parts(ti.a_m)
+        du, _ = split_state(model.dq)
+        a_u, _ = split_state(ti.a_m)
         inertia = self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(
             (rate - self.director_rate) / ti.dt, dd
         )
         internal = sum(model.energy_secant_forms(ti.q_old)) + self.contact.energy_secant_form(ti.q_old, dd)
         F = inertia * model.jacobian * model.dx + internal + hold
         J = ufl.derivative(F, model.q, ufl.TrialFunction(model.W))
-        v_u, _ = _parts(ti.v_old)
+        v_u, _ = split_state(ti.v_old)
         kinetic = 0.5 * (
             self.translational * ufl.dot(v_u, v_u)
             + self.rotary * ufl.dot(self.director_rate, self.director_rate)
@@ -215,7 +197,7 @@ class DeploymentModel:
     def restore(self, path: str | Path) -> None:
         """Velocity, acceleration, the stowed state and the director velocity from a checkpoint
         written by :func:`write_deployment_checkpoint` (the state itself is already in place)."""
-        ti, W, q = self.integrator, self.model.W, self.model.q
+        ti, W = self.integrator, self.model.W
         parts = {}
         for prefix in ("velocity_", "acceleration_", "stowed_"):
             parts.update(checkpoint.empty_state_parts(W, prefix))
@@ -223,12 +205,9 @@ class DeploymentModel:
         checkpoint.read_functions(path, {**parts, **extra})
         checkpoint.set_state(ti.v_old, parts, "velocity_")
         checkpoint.set_state(ti.a_old, parts, "acceleration_")
-        checkpoint.set_state(self.stowed, parts, "stowed_")
+        checkpoint.set_state(self.hold.stowed, parts, "stowed_")
         # the hold's dead forces are what held the end in the stowed state
-        current = q.x.array.copy()
-        q.x.array[:] = self.stowed.x.array
-        self._dead_full = self._end_internal_force()
-        q.x.array[:] = current
+        self.hold.restore_stowed()
         ti.restart()
 
     def advance(self) -> None:
@@ -236,59 +215,6 @@ class DeploymentModel:
         if self.scheme == "conserving":  # before q_old moves on
             self.director_rate.interpolate(self._new_director_rate)
         self.integrator.advance()
-
-    def _owned_edge_dofs(self, tag: int) -> np.ndarray:
-        """Owned W-dofs (local indices) of every state component on the edge ``tag``."""
-        facets = self.tape.strip.facet_tags.find(tag)
-        W = self.model.W
-        dofs = []
-        for i, n in ((0, 3), (1, 2)):
-            for j in range(n):
-                sub = W.sub(i).sub(j)
-                V, _ = sub.collapse()
-                dofs.append(dolfinx.fem.locate_dofs_topological((sub, V), 1, facets)[0])
-        dofs = np.unique(np.concatenate(dofs))
-        return dofs[dofs < W.dofmap.index_map.size_local * W.dofmap.index_map_bs]
-
-    def _end_internal_force(self) -> np.ndarray:
-        """f_int(q) on the free end's owned dofs: in the stowed state, what the pull and guide held."""
-        internal = dolfinx.fem.Function(self.model.W)
-        dolfinx.fem.assemble_vector(internal.x.array, dolfinx.fem.form(self._internal_form))
-        internal.x.scatter_reverse(dolfinx.la.InsertMode.add)
-        return internal.x.array[self._end_dofs].copy()
-
-    def hold_at(self, t: float) -> float:
-        """The factor of the hold at time t: 1 at release, 0 after ``release_time`` (C1 smoothstep).
-
-        An instantaneous release would hit the end's tiny mass with the guide's reactions
-        (accelerations of 10^7 m/s^2 on the coarse mesh) and start a shock; dead forces alone,
-        without the spring, leave the end's rotations unstable. The thesis's explicit run
-        released with smooth-step amplitudes too.
-        """
-        s = min(max(t / self.release_time, 0.0), 1.0) if self.release_time > 0 else 1.0
-        return 1.0 - s * s * (3.0 - 2.0 * s)
-
-    def release(self, t: float) -> None:
-        """Set the hold (spring and dead forces) of time t."""
-        factor = self.hold_at(t)
-        self.hold_factor.value = factor
-        self._dead.value = factor * self._dead_full
-
-    def hold_work(self) -> float:
-        """The hold's work on the tape over the step just solved [J] (collective; before advance).
-
-        Its force at the level where the scheme applies it (state q_f, hold factor of that time:
-        what the residual holds) dotted with the step.
-        """
-        f = dolfinx.fem.Function(self.model.W)
-        dolfinx.fem.assemble_vector(f.x.array, self._hold_form)
-        f.x.scatter_reverse(dolfinx.la.InsertMode.add)
-        force = -f.x.array
-        force[self._end_dofs] += self._dead.value
-        W = self.model.W
-        n = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
-        dq = self.model.q.x.array[:n] - self.integrator.q_old.x.array[:n]
-        return self.comm.allreduce(float(np.dot(force[:n], dq)), op=MPI.SUM)
 
     # -- start ----------------------------------------------------------------------------------
     def initial_acceleration(self) -> None:
@@ -300,8 +226,8 @@ class DeploymentModel:
         """
         model, ti = self.model, self.integrator
         trial, test = ufl.TrialFunction(model.W), model.dq
-        a_u, a_theta = _parts(trial)
-        du, dtheta = _parts(test)
+        a_u, a_theta = split_state(trial)
+        du, dtheta = split_state(test)
         Dd, _, _ = director_rates(model, model.theta, ufl.as_vector([0.0, 0.0]))
         mass = (
             (
@@ -315,7 +241,7 @@ class DeploymentModel:
         M.assemble()
         b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(-self._internal_form))
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        b.array[self._end_dofs] += self._dead_full
+        b.array[self.hold.end_dofs] += self.hold.dead_full
         fixed = np.concatenate([bc.dof_indices()[0] for bc in self.bcs])
         owned = b.getLocalSize()
         b.array[fixed[fixed < owned]] = 0.0
@@ -349,47 +275,8 @@ class DeploymentModel:
         return np.array([global_scalar(f, self.model.mesh.comm) for f in self._tip_forms])
 
     def lift_off(self) -> dict[str, float]:
-        """The coiled length and the deployed fraction lambda (collective).
-
-        The lift-off point is the last point of the centre line, counted from the root, whose
-        inner face lies within ``lift_off_gap`` h of its obstacle (the turn beneath or the
-        hub). The last such point, not the first beyond it: after release the turns inside the
-        coil rattle and open by a few h here and there, and the tape bridges the climbs over the
-        root step; neither is unspooling. The coiled length is the
-        material coordinate where the gap crosses that value, less the distance
-        sqrt((r + G)^2 - r^2) over which a straight tape leaving the coil tangentially stays
-        within G of it (r the obstacle radius there, G the gap), so that
-
-            lambda = 1 - coiled length / L
-
-        is 1 when the tape has unwound down to the root.
-        """
-        c, tp = self.contact, self.config.tape
-        G = self.lift_off_gap * tp.h
-        nodes = c.nodes
-        n_owned = nodes.space.dofmap.index_map.size_local
-        q = self.model.q.x.array
-        face = nodes.positions(q) + c.face_offset * nodes.directors(q)
-        obstacle = c.obstacle_radius(c.psi.x.array)
-        gap = c.polar(face)[0] - obstacle
-        xi = nodes.xi[:, :n_owned]
-        distance = np.abs(xi[1])
-        local_min = distance.min() if distance.size else np.inf
-        centre = distance <= self.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * tp.b
-        columns = (xi[0], gap[:n_owned], obstacle[:n_owned])
-        rows = np.vstack(self.comm.allgather(np.column_stack([col[centre] for col in columns])))
-        s, g, r = rows[np.argsort(rows[:, 0])].T
-        on = np.nonzero(g <= G)[0]
-        if len(on) == 0:
-            coiled = 0.0
-        elif on[-1] == len(s) - 1:
-            coiled = float(s[-1])
-        else:
-            i = on[-1]
-            w = (G - g[i]) / (g[i + 1] - g[i])
-            tangent = math.sqrt((r[i] + G) ** 2 - r[i] ** 2)
-            coiled = max(float(s[i] + w * (s[i + 1] - s[i])) - tangent, 0.0)
-        return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+        """The coiled length and the deployed fraction lambda (:func:`measures.deployment.lift_off`)."""
+        return lift_off(self.tape, self.lift_off_gap)
 
     def update(self) -> None:
         """After a converged step: winding angles from the new state (the hub stays put)."""
@@ -506,15 +393,15 @@ class DeploymentRun:
             m.initial_acceleration()
             self._row(0.0, None)
         # absolute step limits [s], whatever the span left (a restart steps as the first run)
-        smallest = min(cfg.solver.min_step * d.t_end, 1e-3 * d.dt)
+        smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
 
         def control(max_dt, span):
             """Step limits [s] as the fractions of the phase's span the continuation works in."""
-            return dataclasses.replace(
-                cfg.solver,
+            return cfg.solver.control(
                 initial_step=min(d.dt / span, 1.0),
                 max_step=min(max_dt / span, 1.0),
                 min_step=smallest / span,
+                range_fraction=d.t_end / span,  # [solver] min_step: a fraction of t_end
             )
 
         alpha_f = ti.parameters.alpha_f
@@ -522,13 +409,13 @@ class DeploymentRun:
         def set_time(target):
             dt = target - self.time
             ti.set_step(dt)
-            m.release(target - alpha_f * dt)  # the hold at the level of the internal forces
+            m.hold.release(target - alpha_f * dt)  # the hold at the level of the internal forces
 
         def predict(t_from, t_to):
             ti.predict(t_to - t_from)
 
         def converged(step, end):
-            self.external_work += m.hold_work()
+            self.external_work += m.hold.work()
             m.advance()
             self.time = step.load
             # a phase that ends here hands over to the next one, which starts afresh
@@ -542,7 +429,7 @@ class DeploymentRun:
 
         # the release in steps of at most a twentieth of it: the hold's spring is stiff and
         # its work is integrated over the steps; then the steps grow to max_dt
-        release = min(m.release_time, d.t_end)
+        release = min(m.hold.release_time, d.t_end)
         phases = [(release, min(release / 20, d.dt))] if release > 0 else []
         phases.append((d.t_end, max(self.max_dt, d.dt)))
         try:
@@ -577,7 +464,7 @@ def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: 
     functions = {
         **state_parts(ti.v_old, "velocity_"),
         **state_parts(ti.a_old, "acceleration_"),
-        **state_parts(model.stowed, "stowed_"),
+        **state_parts(model.hold.stowed, "stowed_"),
     }
     if model.scheme == "conserving":
         functions["director_rate"] = model.director_rate

@@ -167,7 +167,9 @@ def write_report(directory: str | Path, pictures: bool = True) -> Path:
         _run_table(summary),
         "<h2>Validation</h2>",
         "<p>Every validated quantity against its reference, with the tolerance it is held to "
-        "(issues 4 and 5; 'reported': no pass mark). Definitions: docs/coiling.md, docs/deployment.md.</p>",
+        "('reported': no pass mark). Why each tolerance is what it is, from the physics and the "
+        "literature, is recorded with it in summary.json ('basis'). Definitions: docs/coiling.md, "
+        "docs/deployment.md.</p>",
         _validation_table(summary["validation"]),
         "<h2>Pictures</h2>",
     ]

@@ -1,0 +1,7 @@
+"""Verification of the shell core against exact and published results (:mod:`.cases`).
+
+The case names live here, apart from the cases, so that the command line can offer them as
+choices without loading DOLFINx: ``tapecoil theory`` and ``tapecoil config`` need none of it.
+"""
+
+CASES = ("stress-free", "tape-linear", "rollup", "semicylinder", "slit-plate", "tape-fold")

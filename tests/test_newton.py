@@ -1,0 +1,171 @@
+"""The SNES wrapper's PETSc options: caller-named prefixes, precedence, no leaks, the command line."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import dolfinx
+import pytest
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from tapecoil.config import SolverConfig
+from tapecoil.core.newton import SNESSolver
+
+
+def toy_problem():
+    """-div grad u + u^3 = 1 on the unit square, u = 0 on the boundary: Newton in a few steps."""
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 6, 6)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
+    u = dolfinx.fem.Function(V)
+    v = ufl.TestFunction(V)
+    F = (ufl.inner(ufl.grad(u), ufl.grad(v)) + u**3 * v - v) * ufl.dx
+    J = ufl.derivative(F, u, ufl.TrialFunction(V))
+    mesh.topology.create_connectivity(1, 2)
+    facets = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+    bc = dolfinx.fem.dirichletbc(0.0, dolfinx.fem.locate_dofs_topological(V, 1, facets), V)
+    return F, J, u, [bc]
+
+
+def solver(prefix, settings=None, **kw):
+    F, J, u, bcs = toy_problem()
+    return SNESSolver.from_config(F, J, u, bcs, settings or SolverConfig(), prefix=prefix, **kw)
+
+
+def held(prefix):
+    """The keys under ``prefix`` in PETSc's global options database."""
+    return {k for k in PETSc.Options().getAll() if k.startswith(prefix)}
+
+
+@pytest.fixture
+def user_options():
+    """Options put into the database as the command line would; removed after the test."""
+    opts, names = PETSc.Options(), []
+
+    def put(name, value):
+        opts[name] = value
+        names.append(name)
+
+    yield put
+    for name in names:
+        opts.delValue(name)
+
+
+def test_the_prefix_is_the_callers_and_checked():
+    s = solver("toy_")
+    assert s.snes.getOptionsPrefix() == "toy_"
+    assert s.solve().converged
+    s.destroy()
+    F, J, u, bcs = toy_problem()
+    for bad in ("", "toy", "1toy_", "-toy_", "to y_"):
+        with pytest.raises(ValueError, match="options prefix"):
+            SNESSolver(F, J, u, bcs, prefix=bad)
+
+
+def test_the_database_wins_over_every_table_and_nothing_is_left_behind(user_options):
+    user_options("toy_snes_rtol", 1e-3)  # the user's, e.g. -toy_snes_rtol 1e-3
+    settings = SolverConfig(
+        rtol=1e-9, max_newton=40, petsc_options={"snes_rtol": 1e-6, "snes_max_it": 7, "ksp_type": "gmres"}
+    )
+    s = solver("toy_", settings, defaults={"ksp_type": "cg"}, options={"ksp_type": "preonly"})
+    rtol, _atol, _stol, max_it = s.snes.getTolerances()
+    assert rtol == 1e-3  # the database over the [solver] table and over solver.rtol
+    assert max_it == 7  # the [solver] table over solver.max_newton
+    assert s.snes.getKSP().getType() == "preonly"  # the phase's table over [solver]'s and the caller's
+    assert s.solve().converged
+    assert held("toy_") == {"toy_snes_rtol"}  # the user's option alone, untouched
+    assert PETSc.Options().getReal("toy_snes_rtol") == 1e-3
+    s.destroy()
+
+
+def test_options_do_not_leak_to_the_next_solver():
+    first = solver("one_", SolverConfig(petsc_options={"snes_max_it": 3, "snes_type": "ksponly"}))
+    assert first.snes.getTolerances()[3] == 3 and first.snes.getType() == "ksponly"
+    first.solve()
+    other = solver("two_")  # another prefix
+    again = solver("one_")  # the same prefix, without the table
+    for s in (other, again):
+        assert s.snes.getTolerances()[3] == 25 and s.snes.getType() == "newtonls"
+    assert held("one_") == held("two_") == set()
+    for s in (first, other, again):
+        s.destroy()
+
+
+def test_the_step_tolerance_is_petscs_unless_set(user_options):
+    """snes_stol (the step test that ends the relaxation's solves at round-off) from a table or the user."""
+    assert solver("toy_").snes.getTolerances()[2] == 1e-8
+    assert solver("toy_", SolverConfig(petsc_options={"snes_stol": 0})).snes.getTolerances()[2] == 0.0
+    user_options("toy_snes_stol", 1e-6)
+    assert solver("toy_", SolverConfig(petsc_options={"snes_stol": 0})).snes.getTolerances()[2] == 1e-6
+
+
+def test_options_read_at_the_first_solve_reach_mumps(user_options):
+    """MUMPS reads its ICNTL options when it factorises, at the first solve, not at setFromOptions."""
+    s = solver("toy_", SolverConfig(petsc_options={"mat_mumps_icntl_14": 33, "mat_mumps_icntl_4": 1}))
+    assert s.solve().converged
+    factor = s.snes.getKSP().getPC().getFactorMatrix()
+    assert factor.getMumpsIcntl(14) == 33 and factor.getMumpsIcntl(4) == 1
+    s.destroy()
+    user_options("toy_mat_mumps_icntl_14", 44)
+    s = solver("toy_", SolverConfig(petsc_options={"mat_mumps_icntl_14": 33}))
+    assert s.solve().converged
+    assert s.snes.getKSP().getPC().getFactorMatrix().getMumpsIcntl(14) == 44
+    s.destroy()
+
+
+def test_petsc_options_are_split_off_the_command_line():
+    from tapecoil.app.cli import _known_options, build_parser, split_petsc_options
+
+    known = _known_options(build_parser())
+    argv = ["coil", "c.toml", "--out", "x", "-coil_snes_monitor", "--json", "-coil_snes_rtol", "1e-3"]
+    argv += ["-deploy_snes_divergence_tolerance", "-1", "-h", "-coil_ksp_view"]
+    ours, petsc = split_petsc_options(argv, known)
+    assert ours == ["coil", "c.toml", "--out", "x", "--json", "-h"]
+    assert petsc == [
+        "-coil_snes_monitor",
+        "-coil_snes_rtol",
+        "1e-3",
+        "-deploy_snes_divergence_tolerance",
+        "-1",
+        "-coil_ksp_view",
+    ]
+    assert split_petsc_options(["verify", "--", "-x"], known) == (["verify", "--", "-x"], [])
+
+
+def test_main_hands_petsc_options_over_and_takes_them_back(capsys):
+    """In a process where PETSc is loaded, main() puts them in the database for the command only."""
+    from tapecoil.app.cli import main
+
+    assert main(["verify", "tape-linear", "--json", "-verify_tape_linear_ksp_converged_reason"]) == 0
+    out = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:  # the one that prints
+        assert "Linear verify_tape_linear_ solve converged" in out  # PETSc's own report of the KSP
+        payload = json.loads(out[out.index("[") :])
+        assert payload[0]["passed"] is True
+        assert all(c["passed"] is True for c in payload[0]["checks"])  # booleans, not 1.0
+    assert held("verify_") == set()
+
+
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="starts its own process")
+def test_coil_command_line_reaches_petsc(tmp_path):
+    """tapecoil coil ... -coil_snes_monitor prints PETSc's SNES monitor (a fresh process: PETSc
+    reads the options at its initialisation)."""
+    config = tmp_path / "short.toml"
+    config.write_text("[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.3\n")
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "tapecoil", "coil", str(config), "--mesh", "coarse", "--out", str(out)]
+    cmd += ["--no-report", "-coil_snes_monitor"]
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=Path(__file__).parents[1])
+    assert run.returncode == 0, run.stderr
+    assert "SNES Function norm" in run.stdout
+    assert (out / "summary.json").is_file()
+
+
+def test_a_table_value_of_true_is_a_flag():
+    """TOML true for a PETSc flag acts as the bare flag would (-toy_snes_ksp_ew)."""
+    s = solver("toy_", SolverConfig(petsc_options={"snes_ksp_ew": True}))
+    assert s.snes.getUseEW()
+    s.destroy()
+    assert not solver("toy_").snes.getUseEW()
