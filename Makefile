@@ -2,12 +2,18 @@
 # a host Python with DOLFINx >= 0.9, or a Debian root built on first use).
 #   make demo / make test      the two commands of the README
 #   make run CMD="..."         any command in the environment
-#   TAPECOIL_SUITE=sid make test   the same on Debian sid (DOLFINx 0.11)
+# The test targets run on each environment of SUITES in turn (tools/test-suites), provisioning
+# a missing Debian root first, and end with a summary; a failure in any suite fails them:
+#   make test                  serial and MPI suites on Debian trixie (DOLFINx 0.9), then sid (0.11)
+#   make test SUITES=trixie    one suite only (also: SUITES=sid, SUITES=host for the host Python)
+# SUITES defaults to $(TAPECOIL_SUITE) when that is set, to host when TAPECOIL_ENV=host.
+# The other targets use the one environment of tools/env.sh (TAPECOIL_SUITE, default trixie).
 ENV := tools/env.sh
 RUN := $(ENV) run
 NP ?= 2
 MESH ?= coarse
 CASE ?= fold
+SUITES ?= $(if $(filter host,$(TAPECOIL_ENV)),host,$(or $(TAPECOIL_SUITE),trixie sid))
 
 .PHONY: setup demo test test-serial test-mpi validate bench lint shell run info clean-env
 
@@ -20,15 +26,14 @@ demo: setup
 	$(RUN) python3 demos/theory_report.py
 	$(RUN) mpirun -n $(NP) python3 demos/benchmark.py $(MESH)
 
-test: setup
-	$(RUN) tools/run-tests serial
-	$(RUN) tools/run-tests mpi $(NP)
+test:
+	@NP=$(NP) tools/test-suites "serial mpi" $(SUITES)
 
-test-serial: setup
-	$(RUN) tools/run-tests serial
+test-serial:
+	@NP=$(NP) tools/test-suites serial $(SUITES)
 
-test-mpi: setup
-	$(RUN) tools/run-tests mpi $(NP)
+test-mpi:
+	@NP=$(NP) tools/test-suites mpi $(SUITES)
 
 validate: setup
 	$(RUN) tools/run-tests slow

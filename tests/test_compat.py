@@ -77,3 +77,58 @@ def test_gmsh_model_to_mesh_distributed():
     mesh = _check_rectangle(MPI.COMM_WORLD)
     assert mesh.topology.index_map(2).size_local > 0  # rank 0 built it, every rank got a share
     assert np.all(np.isfinite(mesh.geometry.x))
+
+
+def _mixed_space(comm):
+    import basix.ufl
+    import dolfinx
+
+    mesh = dolfinx.mesh.create_unit_square(comm, 3, 2, dolfinx.mesh.CellType.quadrilateral)
+    cell = mesh.basix_cell()
+    P = basix.ufl.element("Lagrange", cell, 2, shape=(3,))
+    T = basix.ufl.element("Lagrange", cell, 2, shape=(2,))
+    return dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([P, T]))
+
+
+def _check_collapse(W):
+    import dolfinx
+
+    parent = dolfinx.fem.Function(W)
+    parent.x.array[:] = np.arange(parent.x.array.size)
+    for sub in ((0,), (0, 2), (1,), (1, 1)):
+        space = W
+        for i in sub:
+            space = space.sub(i)
+        V, dofs = compat.collapse(space)
+        n = (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * V.dofmap.index_map_bs
+        assert dofs.dtype == np.int32 and dofs.shape == (n,)  # flat, one parent dof per dof of V
+        assert len(np.unique(dofs)) == n and dofs.max() < parent.x.array.size
+        if len(sub) == 1:  # the map agrees with DOLFINx's own collapse of a sub-function
+            assert np.array_equal(parent.sub(sub[0]).collapse().x.array, parent.x.array[dofs])
+    # the five scalar components of the shell share one node order
+    xi = [compat.collapse(W.sub(i).sub(j))[0].tabulate_dof_coordinates() for i, j in ((0, 0), (0, 2), (1, 1))]
+    assert all(np.array_equal(x, xi[0]) for x in xi)
+
+
+def test_collapse_map_is_flat():
+    from mpi4py import MPI
+
+    _check_collapse(_mixed_space(MPI.COMM_SELF))
+
+
+@pytest.mark.mpi
+def test_collapse_map_is_flat_distributed():
+    from mpi4py import MPI
+
+    _check_collapse(_mixed_space(MPI.COMM_WORLD))
+
+
+def test_offscreen_rendering(tmp_path):
+    pyvista = pytest.importorskip("pyvista")
+    compat.start_offscreen_rendering()
+    plotter = pyvista.Plotter(off_screen=True, window_size=(160, 120))
+    plotter.add_mesh(pyvista.Sphere(), color="red")
+    image = plotter.screenshot(str(tmp_path / "sphere.png"), return_img=True)
+    plotter.close()
+    assert image.shape[:2] == (120, 160)
+    assert (image[..., 0] > image[..., 2] + 50).any()  # the red sphere, not a blank picture

@@ -56,6 +56,53 @@ def assemble_matrix(A, a, bcs, diagonal: float = 1.0):
     return dolfinx.fem.petsc.assemble_matrix(A, a, bcs, diagonal)
 
 
+def collapse(space) -> tuple:
+    """``space.collapse()`` as ``(collapsed space, map)`` with the map a flat int32 array.
+
+    The map gives, for each dof of the collapsed space (local and ghost, in its order), the dof
+    of the parent space. Its type differs by version: 0.9 and 0.10 return a list of ints (one
+    per collapsed dof); 0.11 (mixed-topology support, FEniCS/dolfinx#4133) returns a list of
+    int32 arrays, one per cell type of the mesh, so ``np.asarray`` of it has shape (1, n) on the
+    single-cell-type meshes tapecoil uses, and indexing a dof array with it adds an axis.
+    Detected from the returned value, not from the version number.
+    """
+    collapsed, dofs = space.collapse()
+    dofs = np.asarray(dofs, dtype=np.int32)
+    if dofs.ndim == 2:  # one map per cell type (0.11)
+        if dofs.shape[0] != 1:  # pragma: no cover - tapecoil meshes have one cell type
+            raise NotImplementedError(f"collapse of a space on {dofs.shape[0]} cell types")
+        dofs = dofs[0]
+    return collapsed, dofs
+
+
+def start_offscreen_rendering() -> None:
+    """Let PyVista render off screen when no X display is set (``DISPLAY`` empty).
+
+    Debian trixie (DOLFINx 0.9) has PyVista 0.44 on VTK 9.3, whose render window needs an X
+    server: ``pyvista.start_xvfb()`` starts a virtual one. Debian sid (DOLFINx 0.11) has
+    PyVista 0.49, which no longer has ``start_xvfb`` (deprecated in 0.45, removed in 0.48), on
+    VTK 9.6, which picks its render window at run time: there the EGL window is asked for
+    directly (through ``VTK_DEFAULT_OPENGL_WINDOW``), which renders without any display and
+    spares VTK's failed attempt at X and its warning. A choice already made in
+    ``VTK_DEFAULT_OPENGL_WINDOW`` is kept. Detected from the installed PyVista and VTK, not
+    from the version numbers.
+    """
+    import os
+
+    import pyvista
+
+    pyvista.OFF_SCREEN = True
+    if os.environ.get("DISPLAY") or os.environ.get("VTK_DEFAULT_OPENGL_WINDOW"):
+        return
+    if hasattr(pyvista, "start_xvfb"):  # PyVista < 0.48
+        pyvista.start_xvfb()
+        return
+    import vtkmodules.vtkRenderingOpenGL2 as gl
+
+    if hasattr(gl, "vtkEGLRenderWindow"):
+        os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
+
+
 def create_mesh(comm, cells, x, element, partitioner=None):
     """``dolfinx.mesh.create_mesh`` by keyword: 0.10 swapped the positions of x and the element."""
     return dolfinx.mesh.create_mesh(comm, cells=cells, x=x, e=element, partitioner=partitioner)

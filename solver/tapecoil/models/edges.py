@@ -120,5 +120,3 @@ class RigidSection:
         self.theta.interpolate(angles)
         self.rigid_displacement.interpolate(lambda x: (Q - np.eye(3)) @ geom.phi0(x))
         self.angle = angle
-
-

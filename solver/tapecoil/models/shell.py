@@ -352,16 +352,20 @@ class Nodes:
     """
 
     def __init__(self, model: NaghdiShell):
+        from tapecoil.core import compat
+
         W = model.W
-        spaces_maps = [W.sub(0).sub(i).collapse() for i in range(3)]
-        spaces_maps += [W.sub(1).sub(i).collapse() for i in range(2)]
+        spaces_maps = [compat.collapse(W.sub(0).sub(i)) for i in range(3)]
+        spaces_maps += [compat.collapse(W.sub(1).sub(i)) for i in range(2)]
         self.space = spaces_maps[0][0]
         xi = self.space.tabulate_dof_coordinates()
         for space, _ in spaces_maps[1:]:  # the same node order in every collapsed component
             if not np.array_equal(space.tabulate_dof_coordinates(), xi):
                 raise RuntimeError("collapsed shell components do not share their node order")
-        self.u_dofs = np.column_stack([np.asarray(m) for _, m in spaces_maps[:3]])
-        self.theta_dofs = np.column_stack([np.asarray(m) for _, m in spaces_maps[3:]])
+        self.u_dofs = np.column_stack([m for _, m in spaces_maps[:3]])
+        self.theta_dofs = np.column_stack([m for _, m in spaces_maps[3:]])
+        if self.u_dofs.shape != (xi.shape[0], 3) or self.theta_dofs.shape != (xi.shape[0], 2):
+            raise RuntimeError(f"unexpected collapsed dof maps {self.u_dofs.shape}, {self.theta_dofs.shape}")
         self.xi = xi[:, :2].T.copy()
         self.reference = model.strip.geometry.phi0(self.xi)
         self.frame, self.theta_ref = model.director_frame_numpy(self.xi)

@@ -1,13 +1,12 @@
 """Off-screen pictures of shell states with PyVista (PNG), for reports and README figures.
 
 The picture is built directly from the finite element state: the vertices of the Q2 function
-space moved to phi0 + u, coloured by a scalar field. Rendering needs an X server: a virtual
-one (Xvfb) is started when no display is set.
+space moved to phi0 + u, coloured by a scalar field. Without a display, rendering goes through
+a virtual X server or VTK's EGL window (compat.start_offscreen_rendering).
 """
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -17,11 +16,7 @@ from tapecoil.models.shell import NaghdiShell
 
 
 def _ensure_display() -> None:
-    import pyvista
-
-    pyvista.OFF_SCREEN = True
-    if not os.environ.get("DISPLAY"):
-        pyvista.start_xvfb()
+    compat.start_offscreen_rendering()
 
 
 def shell_grid(model: NaghdiShell, scalar=None, name: str = "field"):
