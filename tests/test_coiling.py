@@ -24,7 +24,8 @@ def short_tape(hub_angle=1.0, L=0.12) -> Config:
 @pytest.fixture(scope="module")
 def coiled_short():
     """A short tape flattened and coiled by 1 rad on one rank (shared by the tests below)."""
-    from tapecoil.phases.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
 
     model = CoilingModel(short_tape(), MPI.COMM_SELF)
     run = CoilingRun(model)
@@ -159,7 +160,8 @@ def test_bad_coiling_config_is_rejected_before_computing():
 @pytest.mark.parametrize("predictor", ["secant", "shift"])
 def test_two_ranks_coil_as_one(predictor):
     """The same short coiling run distributed over the ranks and on each rank alone."""
-    from tapecoil.phases.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
 
     def coil(comm):
         cfg = short_tape(hub_angle=0.5)
@@ -181,7 +183,7 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
     """Coil to 0.5 rad, stop, resume from the checkpoint to 1 rad: as if never stopped."""
     import csv
 
-    from tapecoil.phases.coiling import run_coiling
+    from tapecoil.phases.coiling_run import run_coiling
 
     half, _ = run_coiling(short_tape(hub_angle=0.5), tmp_path / "half", MPI.COMM_SELF, progress=False)
     assert half["completed"]
@@ -251,7 +253,8 @@ def test_predictor_choice_follows_the_element_length():
 
 def test_shift_and_secant_predictors_reach_the_same_state():
     """The predictor changes the path of Newton, not the equilibrium (a short tape, 1.5 rad)."""
-    from tapecoil.phases.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
 
     states = {}
     for predictor in ("shift", "secant"):
@@ -283,7 +286,8 @@ def test_equal_sense_coil_curves_with_its_section_and_flattens_on_the_hub(coiled
     Both read at the converged state, from the shell's own curvature fields and, for the turn's
     radius, from the nodes' positions about the hub axis.
     """
-    from tapecoil.phases.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
 
     cfg = short_tape(hub_angle=2 * math.pi)
     cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, sense="equal"))

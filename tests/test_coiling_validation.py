@@ -18,7 +18,7 @@ pytestmark = [pytest.mark.slow, pytest.mark.mpi]
 @pytest.fixture(scope="module")
 def stowed():
     from tapecoil.config import load_config
-    from tapecoil.phases.coiling import run_coiling
+    from tapecoil.phases.coiling_run import run_coiling
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset="coarse"))

@@ -22,7 +22,8 @@ def short_stowed_config(t_end=0.012, rho_inf=0.5) -> Config:
 
 
 def coil(config, comm):
-    from tapecoil.phases.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
 
     model = CoilingModel(config, comm)
     run = CoilingRun(model)
@@ -34,7 +35,8 @@ def coil(config, comm):
 def deploy(coiling, config):
     """Deploy from ``coiling``'s state with ``config``'s deployment settings; the stowed state
     (u, theta and the winding angles) is restored afterwards, so that tests can share it."""
-    from tapecoil.phases.deployment import DeploymentModel, DeploymentRun
+    from tapecoil.phases.deployment import DeploymentModel
+    from tapecoil.phases.deployment_run import DeploymentRun
 
     saved = coiling.model.q.x.array.copy(), coiling.contact.psi.x.array.copy()
     try:
@@ -196,7 +198,7 @@ def test_deployment_from_a_checkpoint_builds_no_coiling_problem(stowed_short, tm
     """Deploying from a stowed checkpoint reads the tape alone: no coiling forms, no coiling SNES."""
     from tapecoil.phases import coiling
     from tapecoil.phases.coiling import write_checkpoint
-    from tapecoil.phases.deployment import run_deployment
+    from tapecoil.phases.deployment_run import run_deployment
 
     meta = {"phase": "coiling", "hub_angle": stowed_short.root.angle, "tension": 1.0, "completed": True}
     write_checkpoint(stowed_short, tmp_path / "stowed", meta)

@@ -25,8 +25,8 @@ pytestmark = [pytest.mark.slow, pytest.mark.mpi]
 @pytest.fixture(scope="module")
 def deployed():
     from tapecoil.config import load_config
-    from tapecoil.phases.coiling import run_coiling
-    from tapecoil.phases.deployment import run_deployment
+    from tapecoil.phases.coiling_run import run_coiling
+    from tapecoil.phases.deployment_run import run_deployment
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset="coarse"))

@@ -81,8 +81,9 @@ def test_the_tape_fold_takes_the_settings():
 def coiled():
     """A 0.1 m tape coiled by 0.3 rad with every [solver] key away from its default; the step
     controls the coiling and the deployment built are recorded."""
-    from tapecoil.phases import deployment
-    from tapecoil.phases.coiling import CoilingModel, CoilingRun
+    from tapecoil.phases import deployment, deployment_run
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
 
     cfg = Config()
     cfg.tape.L = 0.1
@@ -104,19 +105,19 @@ def coiled():
     run.flatten()
     run.coil(cfg.coiling.hub_angle)
 
-    original = deployment.Continuation
+    original = deployment_run.Continuation
 
     class RecordedContinuation(original):
         def __init__(self, solve, set_load, state, control, **kw):
             controls.append(("deployment", control))
             super().__init__(solve, set_load, state, control, **kw)
 
-    deployment.Continuation = RecordedContinuation
+    deployment_run.Continuation = RecordedContinuation
     try:
         deploy = deployment.DeploymentModel(model.tape, cfg)
-        result = deployment.DeploymentRun(deploy).run()
+        result = deployment_run.DeploymentRun(deploy).run()
     finally:
-        deployment.Continuation = original
+        deployment_run.Continuation = original
     return cfg, model, run.result.history, deploy, result, controls
 
 

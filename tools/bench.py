@@ -35,8 +35,8 @@ if args.case in ("coil", "deploy"):
     import dataclasses
     from pathlib import Path
 
-    from tapecoil.phases.coiling import run_coiling
-    from tapecoil.phases.deployment import run_deployment
+    from tapecoil.phases.coiling_run import run_coiling
+    from tapecoil.phases.deployment_run import run_deployment
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset=args.mesh))

@@ -39,8 +39,8 @@ def run(
     ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
     ``output.report``; rank 0, after the computation).
     """
-    from tapecoil.phases.coiling import run_coiling
-    from tapecoil.phases.deployment import run_deployment
+    from tapecoil.phases.coiling_run import run_coiling
+    from tapecoil.phases.deployment_run import run_deployment
 
     started = time.perf_counter()
     directory = results.prepare_directory(directory, config, comm)

@@ -15,11 +15,12 @@ from pathlib import Path
 import dolfinx
 import numpy as np
 
-from tapecoil.geometry.meshes import MeshResolution, StripMesh
+from tapecoil.core import compat
 
 
-def write_checkpoint(path: str | Path, strip: StripMesh, functions: dict, meta: dict, comm) -> None:
-    """Write ``functions`` (name -> Function) on ``strip`` and ``meta`` to ``path`` (collective)."""
+def write_checkpoint(path: str | Path, mesh, tags: dict, functions: dict, meta: dict, comm) -> None:
+    """Write ``mesh`` with its ``tags`` (name -> MeshTags), ``functions`` (name -> Function on the
+    mesh) and ``meta`` (JSON-ready) to the directory ``path`` (collective)."""
     import adios4dolfinx
 
     path = Path(path)
@@ -29,14 +30,11 @@ def write_checkpoint(path: str | Path, strip: StripMesh, functions: dict, meta: 
         partial.mkdir(parents=True)
     comm.barrier()
     bp = partial / "state.bp"
-    mesh = strip.mesh
     adios4dolfinx.write_mesh(bp, mesh)
-    adios4dolfinx.write_meshtags(bp, mesh, strip.facet_tags, meshtag_name="facets")
-    adios4dolfinx.write_meshtags(bp, mesh, strip.cell_tags, meshtag_name="cells")
+    for name, meshtags in tags.items():
+        adios4dolfinx.write_meshtags(bp, mesh, meshtags, meshtag_name=name)
     for name, function in functions.items():
         adios4dolfinx.write_function(bp, function, name=name)
-    res = strip.resolution
-    meta = {**meta, "resolution": {"across": res.across, "along": res.along, "grading": res.grading}}
     if comm.rank == 0:
         (partial / "meta.json").write_text(json.dumps(meta, indent=1, default=_json_default))
         old = path.with_name(path.name + ".old")
@@ -63,15 +61,13 @@ def is_checkpoint(path: str | Path) -> bool:
     return (path / "meta.json").is_file() and (path / "state.bp").exists()
 
 
-def read_strip(path: str | Path, geometry, comm) -> StripMesh:
-    """The strip mesh and tags of a checkpoint, distributed over ``comm`` (any rank count)."""
+def read_mesh(path: str | Path, comm, tag_names: tuple[str, ...]) -> tuple:
+    """The mesh of a checkpoint, distributed over ``comm`` (any rank count), and its tags by name."""
     import adios4dolfinx
 
     bp = Path(path) / "state.bp"
     mesh = adios4dolfinx.read_mesh(bp, comm)
-    facets = adios4dolfinx.read_meshtags(bp, mesh, meshtag_name="facets")
-    cells = adios4dolfinx.read_meshtags(bp, mesh, meshtag_name="cells")
-    return StripMesh(mesh, cells, facets, geometry, MeshResolution(**read_meta(path)["resolution"]))
+    return mesh, {name: adios4dolfinx.read_meshtags(bp, mesh, meshtag_name=name) for name in tag_names}
 
 
 def read_functions(path: str | Path, functions: dict) -> None:
@@ -88,7 +84,7 @@ def state_parts(state, prefix: str) -> dict:
     """Copies of the displacement and rotation parts of a shell-state Function, for writing."""
     out = {}
     for part, i in (("displacement", 0), ("rotation", 1)):
-        space, dofs = state.function_space.sub(i).collapse()
+        space, dofs = compat.collapse(state.function_space.sub(i))
         f = dolfinx.fem.Function(space, name=f"{prefix}{part}")
         f.x.array[:] = state.x.array[dofs]
         out[f"{prefix}{part}"] = f
@@ -106,6 +102,6 @@ def empty_state_parts(space, prefix: str) -> dict:
 def set_state(state, parts: dict, prefix: str) -> None:
     """Put the parts read by :func:`read_functions` back into the shell-state Function."""
     for part, i in (("displacement", 0), ("rotation", 1)):
-        _, dofs = state.function_space.sub(i).collapse()
+        _, dofs = compat.collapse(state.function_space.sub(i))
         state.x.array[dofs] = parts[f"{prefix}{part}"].x.array
     state.x.scatter_forward()

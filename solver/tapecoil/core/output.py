@@ -19,7 +19,6 @@ import numpy as np
 
 from tapecoil.core import compat
 from tapecoil.core.collective import raise_everywhere
-from tapecoil.models.shell import NaghdiShell
 
 
 class NonFiniteStateError(RuntimeError):
@@ -28,6 +27,8 @@ class NonFiniteStateError(RuntimeError):
 
 class ShellWriter:
     """VTX time series of a shell's 3D shape and fields: ``write(t)`` after each step.
+
+    ``model`` is a shell model: its mesh, state ``q``, ``display_offset`` and ``curvatures()``.
 
     With ``snapshots`` (a directory) every write also gathers the deformed surface and its
     longitudinal curvature on rank 0 into ``<phase>_<n>.npz`` there (points and values; the
@@ -38,7 +39,7 @@ class ShellWriter:
 
     def __init__(
         self,
-        model: NaghdiShell,
+        model,
         path: str | Path,
         snapshots: str | Path | None = None,
         phase: str = "shell",

@@ -143,7 +143,10 @@ class TapeOnHub:
         (:mod:`tapecoil.core.checkpoint`).
         """
         functions = {**self.checkpoint_functions(), **(extra or {})}
-        checkpoint.write_checkpoint(path, self.strip, functions, meta, self.comm)
+        res = self.strip.resolution
+        meta = {**meta, "resolution": {"across": res.across, "along": res.along, "grading": res.grading}}
+        tags = {"facets": self.strip.facet_tags, "cells": self.strip.cell_tags}
+        checkpoint.write_checkpoint(path, self.strip.mesh, tags, functions, meta, self.comm)
 
     @classmethod
     def read_checkpoint(cls, path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[TapeOnHub, dict]:
@@ -153,7 +156,9 @@ class TapeOnHub:
         """
         meta = checkpoint.read_meta(path)
         tp = config.tape
-        strip = checkpoint.read_strip(path, StripGeometry(tp.R, tp.b, tp.L), comm)
+        mesh, tags = checkpoint.read_mesh(path, comm, ("facets", "cells"))
+        resolution = MeshResolution(**meta["resolution"])
+        strip = StripMesh(mesh, tags["cells"], tags["facets"], StripGeometry(tp.R, tp.b, tp.L), resolution)
         tape = cls(config, comm, strip=strip)
         parts = checkpoint.empty_state_parts(tape.model.W, "")
         checkpoint.read_functions(path, {**parts, "winding_angle": tape.contact.psi})

@@ -11,7 +11,8 @@ from mpi4py import MPI
 
 from tapecoil import theory
 from tapecoil.config import Config
-from tapecoil.phases.coiling import CoilingModel, CoilingRun
+from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling_run import CoilingRun
 
 
 @dataclass(frozen=True)

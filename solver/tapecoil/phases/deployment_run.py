@@ -1,0 +1,335 @@
+"""The deployment run: time steps from release to the deployed state, a history row per step.
+
+:class:`DeploymentRun` steps a :class:`~tapecoil.phases.deployment.DeploymentModel` in time
+(generalized-alpha, adaptive steps with cut-back) and records what each step measured;
+:class:`DeploymentPhase` is the run as a phase of the one runner (:mod:`tapecoil.phases.runner`),
+and :func:`run_deployment` runs it into a results directory.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mpi4py import MPI
+
+from tapecoil.config import Config
+from tapecoil.core.dofs import global_size
+from tapecoil.core.stepping import Continuation, ContinuationError, StepRecord
+from tapecoil.measures.deployment import deployment_measures
+from tapecoil.phases.deployment import (
+    DeploymentModel,
+    read_deployment_checkpoint,
+    write_deployment_checkpoint,
+)
+from tapecoil.phases.runner import LOG, Phase, run_phase
+from tapecoil.phases.tape_on_hub import TapeOnHub
+
+
+@dataclass
+class DeploymentResult:
+    history: list[dict] = field(default_factory=list)
+    completed: bool = False
+    message: str = ""
+
+
+class _Deployed(Exception):
+    """Raised from the step callback to end the time loop once lambda reaches lambda_end."""
+
+
+class DeploymentRun:
+    """Time stepping from release to ``deployment.lambda_end`` (or ``deployment.t_end``).
+
+    Steps start at ``deployment.dt`` and grow by ``solver.grow`` after easy steps up to
+    ``max_dt``; a step that fails is cut back (``solver.cutback``, ``solver.max_cutbacks``),
+    as in the load stepping. ``on_step(row)`` is called on every rank after each step.
+    """
+
+    # the step grows after steps of at most this many Newton iterations: on the first 20 ms of
+    # the coarse benchmark 56 steps against 83 with 5
+    easy_iterations = 8
+
+    def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None, stop=None):
+        self.m = model
+        self.on_step = on_step
+        self.stop = stop  # StopSignals: checked after every converged step
+        d = model.config.deployment
+        self.max_dt = max_dt if max_dt is not None else d.max_dt
+        self.result = DeploymentResult()
+        self.stowed_energy = None
+        self.external_work = 0.0
+        self.time = 0.0
+        self.next_step = None  # the step to try next within the current phase (for a restart)
+        self._restored = False
+        self._t0 = time.perf_counter()
+
+    def restart_state(self) -> dict:
+        """What, besides the model's state, the time stepping needs to go on as if never stopped."""
+        h = self.result.history
+        return {
+            "time": self.time,
+            "next_step": self.next_step,
+            "external_work": self.external_work,
+            "stowed_energy": self.stowed_energy,
+            "history": h,
+            "wall_time_before": h[-1]["wall_time"] if h else 0.0,
+        }
+
+    def restore(self, state: dict) -> None:
+        """Continue from :meth:`restart_state` (the model restored from the same checkpoint)."""
+        self.time = state["time"]
+        self.next_step = state["next_step"]
+        self.external_work = state["external_work"]
+        self.stowed_energy = state["stowed_energy"]
+        self.result.history = list(state["history"])
+        self._t0 -= state["wall_time_before"]
+        self._restored = True
+
+    def _row(self, t: float, step: StepRecord | None) -> dict:
+        m = self.m
+        e = m.energies()
+        potential = e["strain"] + e["contact"]
+        if self.stowed_energy is None:
+            self.stowed_energy = potential
+        lift = m.lift_off()
+        tip = m.tip()
+        row = {
+            "time": t,
+            "step": step.step if step else 0.0,
+            "newton_iterations": step.iterations if step else 0,
+            "cutbacks": step.cutbacks if step else 0,
+            "lambda": lift["lambda"],
+            "coiled_length": lift["coiled_length"],
+            "kinetic_energy": e["kinetic"],
+            "strain_energy": e["strain"],
+            "membrane_energy": e["membrane"],
+            "bending_energy": e["bending"],
+            "shear_energy": e["shear"],
+            "contact_energy": e["contact"],
+            # the work of the releasing hold on the free end
+            "external_work": self.external_work,
+            # the energy the time integration has removed (numerical dissipation: the model has
+            # no physical damping)
+            "dissipated_energy": self.stowed_energy + self.external_work - potential - e["kinetic"],
+            "tip_x": tip[0],
+            "tip_y": tip[1],
+            "tip_z": tip[2],
+            "max_penetration": m.tape.max_penetration(),
+            "wall_time": time.perf_counter() - self._t0,
+        }
+        self.result.history.append(row)
+        if self.on_step is not None:
+            self.on_step(row)
+        return row
+
+    def run(self) -> DeploymentResult:
+        """Step from release (or the restored time) until lambda_end, t_end or a failure.
+
+        :class:`~tapecoil.core.interrupt.Interrupted` (a stop signal) propagates, the state being
+        the last converged one.
+        """
+        m = self.m
+        cfg = m.config
+        d = cfg.deployment
+        ti = m.integrator
+        if not self._restored:
+            m.initial_acceleration()
+            self._row(0.0, None)
+        # absolute step limits [s], whatever the span left (a restart steps as the first run)
+        smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
+
+        def control(max_dt, span):
+            """Step limits [s] as the fractions of the phase's span the continuation works in."""
+            return cfg.solver.control(
+                initial_step=min(d.dt / span, 1.0),
+                max_step=min(max_dt / span, 1.0),
+                min_step=smallest / span,
+                range_fraction=d.t_end / span,  # [solver] min_step: a fraction of t_end
+            )
+
+        alpha_f = ti.parameters.alpha_f
+
+        def set_time(target):
+            dt = target - self.time
+            ti.set_step(dt)
+            m.hold.release(target - alpha_f * dt)  # the hold at the level of the internal forces
+
+        def predict(t_from, t_to):
+            ti.predict(t_to - t_from)
+
+        def converged(step, end):
+            self.external_work += m.hold.work()
+            m.advance()
+            self.time = step.load
+            # a phase that ends here hands over to the next one, which starts afresh
+            self.next_step = step.next_step if step.load < end else None
+            m.update()
+            row = self._row(step.load, step)
+            if row["lambda"] >= d.lambda_end:
+                raise _Deployed
+            if self.stop is not None:
+                self.stop.check(m.comm)
+
+        # the release in steps of at most a twentieth of it: the hold's spring is stiff and
+        # its work is integrated over the steps; then the steps grow to max_dt
+        release = min(m.hold.release_time, d.t_end)
+        phases = [(release, min(release / 20, d.dt))] if release > 0 else []
+        phases.append((d.t_end, max(self.max_dt, d.dt)))
+        try:
+            for end, max_dt in phases:
+                if end <= self.time:
+                    continue
+                cont = Continuation(
+                    m.solver.solve,
+                    set_time,
+                    m.model.q,
+                    control(max_dt, end - self.time),
+                    predict=predict,
+                    easy_iterations=self.easy_iterations,
+                )
+                cont.on_step = lambda step, end=end: converged(step, end)
+                first, self.next_step = self.next_step, None
+                cont.run(self.time, end, first_step=first)
+            self.result.message = f"t_end = {d.t_end:g} s reached before lambda = {d.lambda_end:g}"
+        except _Deployed:
+            self.result.completed = True
+        except ContinuationError as err:
+            # the state is the last converged one (the continuation restored it)
+            self.result.message = str(err)
+        return self.result
+
+
+class DeploymentPhase(Phase):
+    """Deployment as a phase of :func:`~tapecoil.phases.runner.run_phase`: release, then time
+    steps to ``deployment.lambda_end`` or ``t_end``; measures of the deployed fraction against
+    time (:mod:`tapecoil.measures.deployment`)."""
+
+    name, checkpoint_name, unit = "deployment", "deployed", "s"
+
+    def __init__(self, model: DeploymentModel, restart: dict | None = None, stop=None):
+        super().__init__()
+        self.model = model
+        self.target = model.config.deployment.t_end
+        self.run = DeploymentRun(model, stop=stop)
+        self.run.on_step = self._on_step
+        if restart is not None:
+            self.run.restore(restart)
+        self.history = self.run.result.history
+
+    def _on_step(self, row: dict) -> None:
+        if self.on_row is not None:
+            self.on_row(row)
+
+    def position(self) -> float:
+        return self.run.time
+
+    def restart_state(self) -> dict:
+        return self.run.restart_state()
+
+    def checkpoint_meta(self) -> dict:
+        return {"hub_angle": self.model.hub_angle, "tension": 0.0}
+
+    def write_checkpoint(self, path: Path, meta: dict) -> None:
+        write_deployment_checkpoint(self.model, path, meta)
+
+    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
+        return (
+            row["time"],
+            row["step"],
+            row["newton_iterations"],
+            f" lambda {row['lambda']:.3f}",
+            row["step"] > 0,
+        )
+
+    def advance(self) -> None:
+        result = self.run.run()
+        self.completed, self.message = result.completed, result.message
+
+    def end_log(self, summary: dict) -> str:
+        run = summary["run"]
+        return (
+            f"deployment {'completed' if self.completed else 'ended'} at t = {summary['time']:.6g} s, "
+            f"lambda = {summary['lambda']:.4f}: {run['steps']} steps, {run['newton_iterations']} Newton "
+            f"iterations, {run['wall_time']:.1f} s"
+        )
+
+    def summary(self, interrupted, t_start: float) -> dict:
+        """The deployment phase's summary: measures against the theory and the run's figures."""
+        model, history = self.model, self.history
+        comm, res = model.comm, model.tape.strip.resolution
+        timing = model.solver.timing_per_iteration()
+        steps = history[1:]
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "time": history[-1]["time"],
+            "lambda": history[-1]["lambda"],
+            "rho_inf": model.rho_inf,
+            "scheme": model.scheme,
+            "measures": deployment_measures(model.config, history),
+            "run": {
+                "ranks": comm.size,
+                "dofs": global_size(model.model.W),
+                "mesh": f"{res.along} x {res.across}",
+                "steps": len(steps),
+                "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
+                # this process's, including the attempts that failed and were cut back
+                "newton_iterations_total": int(model.solver.timings["iterations"]),
+                "cutbacks": int(sum(r["cutbacks"] for r in steps)),
+                "smallest_step": min((r["step"] for r in steps), default=0.0),
+                "largest_step": max((r["step"] for r in steps), default=0.0),
+                "max_penetration": max(r["max_penetration"] for r in history),
+                "wall_time": history[-1]["wall_time"],
+                "process_wall_time": time.perf_counter() - t_start,
+                "assembly_per_iteration": timing["assembly"],
+                "linear_solve_per_iteration": timing["linear_solve"],
+            },
+        }
+
+
+def run_deployment(
+    config: Config,
+    directory: str | Path,
+    comm=MPI.COMM_WORLD,
+    stowed: str | Path | None = None,
+    tape: TapeOnHub | None = None,
+    progress: bool = True,
+    stop=None,
+    resume: str | Path | None = None,
+) -> tuple[dict, DeploymentModel]:
+    """Deploy from the stowed state, writing into ``directory``; returns the phase summary and model.
+
+    The start is the stowed checkpoint directory ``stowed``, the in-memory ``tape`` (a coiling
+    run's, in its stowed state), or, with ``resume``, a deployment checkpoint (deployed/) to
+    continue from as if never stopped. ``directory`` receives deployment_history.csv (a row per
+    step), deployment.bp and snapshots/ (every ``output.vtx_every`` steps and the last state)
+    and deployed/ (the checkpoint: the latest converged state, every ``output.checkpoint_every``
+    steps and at the end). ``stop``: as in :func:`tapecoil.phases.coiling_run.run_coiling`.
+    """
+    t_start = time.perf_counter()
+    restart = None
+    if resume is not None:
+        model, meta = read_deployment_checkpoint(resume, config, comm)
+        restart = meta["run"]
+    else:
+        if tape is None:
+            if stowed is None:
+                raise ValueError("deployment needs a stowed checkpoint directory or a stowed tape")
+            tape, _ = TapeOnHub.read_checkpoint(stowed, config, comm)
+        model = DeploymentModel(tape, config)
+    d = config.deployment
+    phase = DeploymentPhase(model, restart, stop)
+    if restart is not None:
+        LOG.info("deployment resumed from %s at t = %.6g s", resume, phase.run.time)
+        if meta["completed"]:
+            # nothing left to do: the summary of the checkpoint's state (a resumed pipeline)
+            phase.completed = True
+            return phase.summary(None, t_start), model
+    else:
+        LOG.info(
+            "deployment: %s scheme, rho_inf = %g, to lambda = %g", model.scheme, model.rho_inf, d.lambda_end
+        )
+    summary = run_phase(phase, directory, config, comm, model.model, restart, progress, t_start)
+    return summary, model
