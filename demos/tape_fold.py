@@ -52,7 +52,7 @@ from mpi4py import MPI
 from tapecoil import theory
 from tapecoil.config import MeshConfig, load_config
 from tapecoil.geometry.meshes import MeshResolution
-from tapecoil.verification.cases import tape_fold
+from tapecoil.verification.tape import tape_fold
 
 smoke = os.environ.get("TAPECOIL_DEMO_SMOKE") == "1"
 preset = sys.argv[1] if len(sys.argv) > 1 else ("coarse" if smoke else "default")

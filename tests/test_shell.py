@@ -10,7 +10,8 @@ from tapecoil.config import load_config
 from tapecoil.geometry.meshes import FREE_END, MeshResolution, create_strip_mesh
 from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.models.shell import NaghdiShell, ShellMaterial, angles_from_director
-from tapecoil.verification.cases import ROLLUP_MESHES, rollup, run_case, semicylinder, slit_plate
+from tapecoil.verification.cases import run_case
+from tapecoil.verification.sze import ROLLUP_MESHES, rollup, semicylinder, slit_plate
 
 
 def assert_passed(result):
@@ -30,7 +31,7 @@ def test_tape_linear_coarse():
 
 
 def test_full_integration_locks_where_psri_does_not():
-    from tapecoil.verification.cases import tape_linear
+    from tapecoil.verification.tape import tape_linear
 
     cfg, res = load_config(), MeshResolution(4, 40)
     full = tape_linear(cfg, res, technology="full").checks[1].computed
@@ -121,7 +122,7 @@ def test_two_ranks_agree_with_one_on_a_nonlinear_case():
 @pytest.mark.slow
 def test_tape_fold_default_mesh():
     """Opposite-sense fold of the benchmark tape: plateau moment, fold radius, flat section, mu."""
-    from tapecoil.verification.cases import tape_fold
+    from tapecoil.verification.tape import tape_fold
 
     result = tape_fold(load_config(), MeshResolution(9, 125))
     assert_passed(result)

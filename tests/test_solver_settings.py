@@ -11,7 +11,8 @@ from mpi4py import MPI
 from tapecoil.config import Config, SolverConfig, StepControl
 from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import MeshResolution
-from tapecoil.verification.cases import run_case, tape_fold
+from tapecoil.verification.cases import run_case
+from tapecoil.verification.tape import tape_fold
 
 
 def solver_config(**kw) -> Config:

@@ -21,7 +21,7 @@ from mpi4py import MPI
 
 from tapecoil.config import MeshConfig, load_config
 from tapecoil.geometry.meshes import MeshResolution
-from tapecoil.verification.cases import tape_fold
+from tapecoil.verification.tape import tape_fold
 
 parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
