@@ -6,7 +6,6 @@ import itertools
 import math
 
 import numpy as np
-from mpi4py import MPI
 
 from tapecoil import theory
 from tapecoil.measures.measure import Measure
@@ -151,9 +150,7 @@ def lift_off(tape, gap_factor: float) -> dict[str, float]:
     obstacle = c.obstacle_radius(c.psi.x.array)
     gap = c.polar(face)[0] - obstacle
     xi = nodes.xi[:, :n_owned]
-    distance = np.abs(xi[1])
-    local_min = distance.min() if distance.size else np.inf
-    centre = distance <= tape.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * tp.b
+    centre = tape.centre_nodes()
     columns = (xi[0], gap[:n_owned], obstacle[:n_owned])
     rows = np.vstack(tape.comm.allgather(np.column_stack([col[centre] for col in columns])))
     s, g, r = rows[np.argsort(rows[:, 0])].T

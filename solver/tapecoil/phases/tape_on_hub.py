@@ -54,7 +54,6 @@ class TapeOnHub:
         self.element_length = tp.L / strip.resolution.along
         self.model = model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
         self.frame = HubFrame(r_hub, tp.h, config.coiling.sense)
-        self.axis_point = self.frame.axis_point
         self.root = HubRoot(model, ROOT, self.frame, CircularArcSection.from_tape(tp))
 
         cc = config.contact
@@ -89,6 +88,13 @@ class TapeOnHub:
         out["contact"] = out["contact_hub"] + out["contact_coil"]
         return out
 
+    def centre_nodes(self) -> np.ndarray:
+        """Mask of this rank's owned nodes on the centre line (the line of xi_2 nearest 0; collective)."""
+        nodes = self.contact.nodes
+        distance = np.abs(nodes.xi[1, : nodes.space.dofmap.index_map.size_local])
+        local_min = distance.min() if distance.size else np.inf
+        return distance <= self.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * self.config.tape.b
+
     def centre_line(self) -> dict[str, np.ndarray]:
         """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
 
@@ -97,10 +103,7 @@ class TapeOnHub:
         nodes = self.contact.nodes
         n_owned = nodes.space.dofmap.index_map.size_local
         xi = nodes.xi[:, :n_owned]
-        distance = np.abs(xi[1])
-        local_min = distance.min() if distance.size else np.inf
-        centre = self.comm.allreduce(local_min, op=MPI.MIN)
-        mask = distance <= centre + 1e-9 * self.config.tape.b
+        mask = self.centre_nodes()
         radius, _ = self.contact.polar(nodes.positions(self.model.q.x.array)[:, :n_owned])
         local = np.column_stack([xi[0][mask], self.contact.psi.x.array[:n_owned][mask], radius[mask]])
         rows = np.vstack(self.comm.allgather(local))
