@@ -61,6 +61,79 @@ def test_coil_refuses_bad_input_before_computing(tmp_path, capsys):
     assert not (tmp_path / "out").exists()  # nothing was started
 
 
+def test_coil_refuses_a_hub_angle_longer_than_the_tape(tmp_path, capsys):
+    path = tmp_path / "long.toml"
+    path.write_text("[coiling]\nhub_angle = 200\n")
+    assert main(["coil", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "coiling.hub_angle = 200 rad is more than the tape can coil" in err
+    assert err.count("\n") == 1
+    assert not (tmp_path / "out").exists()  # nothing was started
+
+
+class _Started(Exception):
+    """Raised by the stand-in for the pipeline: the command got as far as computing."""
+
+
+WEAK_PULL = r"coiling\.tension = 0\.1 N is below the 0\.374 N the hub needs \(Eq\. 2\.6"
+
+
+@pytest.mark.parametrize("command", ["coil", "run"])
+def test_coiling_commands_warn_of_a_weak_pull_before_computing(tmp_path, monkeypatch, command):
+    """Once, as a ConfigWarning and in run.log, before the run starts (which is stopped there)."""
+    import re
+
+    from tapecoil.app import pipeline
+    from tapecoil.config import ConfigWarning
+
+    seen = {}
+
+    def started(config, directory, **kwargs):
+        seen["warnings"] = [str(w.message) for w in record if issubclass(w.category, ConfigWarning)]
+        seen["log"] = (Path(directory) / "run.log").read_text()
+        raise _Started
+
+    monkeypatch.setattr(pipeline, "run", started)
+    path = tmp_path / "weak.toml"
+    path.write_text("[coiling]\ntension = 0.1\n")
+    with pytest.warns(ConfigWarning, match=WEAK_PULL) as record, pytest.raises(_Started):
+        main([command, str(path), "--out", str(tmp_path / "out"), "--json"])
+    assert len(seen["warnings"]) == 1 and re.match(WEAK_PULL, seen["warnings"][0])
+    assert len(re.findall("WARNING configuration: " + WEAK_PULL, seen["log"])) == 1
+
+
+def test_the_weak_pull_warning_is_one_console_line(tmp_path):
+    """Printed by tapecoil itself: once DOLFINx has loaded FFCx, Python's display of warnings is
+    gone (FFCx sends them to the logging module)."""
+    import sys
+
+    path, out = tmp_path / "weak.toml", tmp_path / "out"
+    path.write_text("[coiling]\ntension = 0.1\n")
+    code = (
+        "import sys\n"
+        "from tapecoil.app import pipeline\n"
+        "from tapecoil.app.cli import main\n"
+        "def started(config, directory, **kwargs):\n"
+        "    sys.exit(0)\n"
+        "pipeline.run = started\n"
+        f"sys.exit(main(['coil', {str(path)!r}, '--out', {str(out)!r}]))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    (line,) = done.stderr.splitlines()
+    assert line.startswith("tapecoil: warning: coiling.tension = 0.1 N is below the 0.374 N the hub needs")
+
+
+def test_commands_that_do_not_coil_load_a_weak_pull_quietly(tmp_path, capsys, recwarn):
+    from tapecoil.config import ConfigWarning
+
+    path = tmp_path / "weak.toml"
+    path.write_text("[coiling]\ntension = 0.1\n")
+    assert main(["config", str(path)]) == 0
+    assert main(["theory", str(path)]) == 0
+    assert not [w for w in recwarn if issubclass(w.category, ConfigWarning)]
+
+
 def test_coil_short_run_writes_results(tmp_path, capsys):
     import json
 
@@ -292,7 +365,11 @@ def test_mesh_command_takes_the_configuration(tmp_path, capsys):
     import os
 
     path = tmp_path / "short.toml"
-    path.write_text("[tape]\nL = 0.1\n[mesh]\npreset = 'coarse'\nelements_across = 3\ngrading = 2.0\n")
+    # a hub_angle the 0.1 m tape can coil (at most 7.8 rad): the configuration must be valid
+    path.write_text(
+        "[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.5\n"
+        "[mesh]\npreset = 'coarse'\nelements_across = 3\ngrading = 2.0\n"
+    )
     cwd = os.getcwd()
     os.chdir(tmp_path)
     try:

@@ -1,10 +1,13 @@
 """Configuration: defaults, TOML round trip, and one clear error per kind of bad input."""
 
+import dataclasses
+import inspect
 import math
+import re
 
 import pytest
 
-from tapecoil.config import Config, ConfigError, config_from_dict, load_config, to_toml
+from tapecoil.config import Config, ConfigError, ConfigWarning, config_from_dict, load_config, to_toml
 
 
 def test_defaults_are_the_benchmark_tape():
@@ -18,7 +21,10 @@ def test_defaults_are_the_benchmark_tape():
 def test_toml_round_trip(tmp_path):
     c = Config()
     c.tape.L = 0.25
+    c.coiling.hub_angle = 12.0  # the default 36 rad needs more than 0.25 m of tape
     c.mesh.preset = "coarse"
+    c.contact.stop_penetration = 0.25
+    c.contact.search_margin = 1.5
     c.solver.petsc_options = {"pc_factor_mat_solver_type": "mumps", "snes_monitor": True}
     c.coiling.petsc_options = {"snes_max_it": 40}
     c.deployment.petsc_options = {"snes_linesearch_type": "bt", "snes_rtol": 1e-9}
@@ -69,11 +75,94 @@ def test_integer_accepted_for_float(tmp_path):
         ({"deployment": {"petsc_options": "snes_monitor"}}, r"deployment\.petsc_options must be a table"),
         ({"hub": {"radius": 1e-4}}, r"hub\.radius .* must exceed twice tape\.h"),
         ({"coiling": {"tension": -1.0}}, r"coiling\.tension .* must be >= 0 \[N\]"),
+        (
+            {"coiling": {"hub_angle": 200.0}},
+            r"coiling\.hub_angle = 200 rad is more than the tape can coil: the whole tape "
+            r"\(tape\.L = 0\.5 m\) is on the hub .* after 38\.3 rad \(6\.1 turns\)",
+        ),
+        # the default 36 rad on a tape too short for it
+        ({"tape": {"L": 0.1}}, r"coiling\.hub_angle = 36 rad .*tape\.L = 0\.1 m.* after 7\.805 rad"),
+        ({"contact": {"stop_penetration": 0.0}}, r"contact\.stop_penetration = 0\.0 .* \(0, 100\]"),
+        ({"contact": {"stop_penetration": 150.0}}, r"stop_penetration = 150\.0 .* \(0, 100\]"),
+        ({"contact": {"search_margin": 0.0}}, r"contact\.search_margin = 0\.0 is out of range: must be > 0"),
+        ({"contact": {"search_margin": -1.0}}, r"contact\.search_margin .* must be > 0"),
     ],
 )
 def test_bad_values_are_refused_with_key_and_range(data, message):
     with pytest.raises(ConfigError, match=message):
         config_from_dict(data)
+
+
+def test_hub_angle_up_to_the_whole_tape_is_accepted():
+    from tapecoil.theory import max_hub_angle
+
+    largest = max_hub_angle(0.5, 0.0127, 1e-4)
+    assert config_from_dict({"coiling": {"hub_angle": largest}}).coiling.hub_angle == largest
+    with pytest.raises(ConfigError, match=r"coiling\.hub_angle .* after 38\.3 rad"):
+        config_from_dict({"coiling": {"hub_angle": largest * (1 + 1e-9)}})
+
+
+def test_contact_stop_and_search_keys_load_from_toml(tmp_path):
+    assert (Config().contact.stop_penetration, Config().contact.search_margin) == (1.0, 2.0)
+    path = tmp_path / "c.toml"
+    path.write_text("[contact]\nstop_penetration = 0.75\nsearch_margin = 0.5\n")
+    c = load_config(path).contact
+    assert (c.stop_penetration, c.search_margin) == (0.75, 0.5)
+    assert isinstance(c.stop_penetration, float)
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (
+            {"coiling": {"tension": 0.0}},
+            r"coiling\.tension = 0 N is below the 0\.374 N the hub needs \(Eq\. 2\.6 .*\): "
+            r"with too little pull the tape does not wrap onto the hub",
+        ),
+        ({"coiling": {"tension": 0.3}}, r"coiling\.tension = 0\.3 N is below the 0\.374 N"),
+        (
+            {"hub": {"radius": 4 * 0.0151}, "coiling": {"hub_angle": 5.0}},
+            r"coiling\.tension = 1 N is below the 7\.15 N the hub needs \(Eq\. 2\.9",
+        ),
+    ],
+)
+def test_a_pull_below_the_tension_the_hub_needs_is_named_but_loads_quietly(data, message, recwarn):
+    config = config_from_dict(data)
+    # no warning on loading: a report, a plot or a tension study loads it too
+    assert not [w for w in recwarn if issubclass(w.category, ConfigWarning)]
+    (found,) = config.coiling_warnings()
+    assert re.match(message, found)
+
+
+@pytest.mark.parametrize(
+    "data",
+    [
+        {"coiling": {"tension": 0.374}},
+        # loss of uniqueness: no law gives the tension, so nothing to warn against
+        {"hub": {"radius": 2 * 0.0151}, "coiling": {"hub_angle": 5.0, "tension": 0.0}},
+        {"hub": {"radius": 4 * 0.0151}, "coiling": {"hub_angle": 5.0, "tension": 7.2}},
+    ],
+)
+def test_enough_pull_is_not_warned_of(data):
+    assert config_from_dict(data).coiling_warnings() == []
+
+
+def test_the_default_pull_is_not_warned_of(recwarn):
+    assert load_config().coiling.tension == 1.0
+    assert load_config().coiling_warnings() == []
+    assert not [w for w in recwarn if issubclass(w.category, ConfigWarning)]
+
+
+@pytest.mark.parametrize("section", [f for f in dataclasses.fields(Config)], ids=lambda f: f.name)
+def test_every_key_is_documented_with_its_unit(section):
+    # cleandoc: Python 3.13 strips the docstring's indentation itself, earlier versions do not
+    doc = inspect.cleandoc(section.default_factory.__doc__).split("Attributes:")[1]
+    entries = dict(re.findall(r"^ {4}(\w+): (.*?)(?=^ {4}\w+:|\Z)", doc, re.M | re.S))
+    for f in dataclasses.fields(section.default_factory):
+        key = f"{section.name}.{f.name}"
+        assert f.name in entries, f"{key} is not in the Attributes of its section's docstring"
+        if f.type in ("float", "int"):
+            assert re.search(r"\[[^\]]+\]", entries[f.name]), f"{key}: no unit in brackets"
 
 
 def test_file_errors(tmp_path):

@@ -1,15 +1,20 @@
 """Parameter sweeps: the sweep file is checked before anything runs; cases on sub-communicators."""
 
 import json
+from pathlib import Path
 
 import pytest
 from mpi4py import MPI
 
 from tapecoil.config import ConfigError
 
+# the study coils its own 1 rad; the configuration's hub_angle must still suit a 0.1 m tape on
+# every hub of the sweep (at most 7.3 rad, on the 0.9 R hub), the default 36 rad does not
 TINY = """
 [tape]
 L = 0.1
+[coiling]
+hub_angle = 1.0
 [mesh]
 preset = "coarse"
 [sweep]
@@ -79,6 +84,43 @@ def test_a_bad_sweep_is_refused_before_anything_runs(tmp_path, text, message):
     path.write_text(text)
     with pytest.raises(ConfigError, match=message):
         load_sweep(path)
+
+
+class _Started(Exception):
+    """Raised by the stand-in for the pipeline: the sweep got as far as computing a case."""
+
+
+def test_a_coil_sweep_warns_of_each_weak_pull_before_computing(tmp_path, monkeypatch):
+    """Loading the sweep is quiet; running it warns of every case's weak pull before the first
+    case computes, and the case's run.log has its own."""
+    import warnings
+
+    from tapecoil.app import pipeline
+    from tapecoil.app.sweep import case_name, load_sweep, run_sweep
+    from tapecoil.config import ConfigWarning
+
+    path = tmp_path / "weak.toml"
+    path.write_text('[sweep]\nstudy = "coil"\n[sweep.parameters]\n"coiling.tension" = [0.1, 0.2, 1.0]\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConfigWarning)
+        sweep = load_sweep(path)
+    out, seen = tmp_path / "out", {}
+
+    def started(config, directory, **kwargs):
+        seen["warnings"] = [str(w.message) for w in record if issubclass(w.category, ConfigWarning)]
+        seen["log"] = (Path(directory) / "run.log").read_text()
+        raise _Started
+
+    monkeypatch.setattr(pipeline, "run", started)
+    with pytest.warns(ConfigWarning) as record, pytest.raises(_Started):
+        run_sweep(sweep, out, MPI.COMM_SELF, progress=False)
+    first, second = seen["warnings"]  # the 1 N case has enough pull
+    assert first.startswith(
+        "sweep case {'coiling.tension': 0.1}: coiling.tension = 0.1 N is below the 0.374 N"
+    )
+    assert second.startswith("sweep case {'coiling.tension': 0.2}: coiling.tension = 0.2 N is below")
+    assert seen["log"].count("WARNING configuration: " + first) == 1
+    assert not (out / case_name(1, sweep.cases()[1])).exists()
 
 
 @pytest.mark.mpi

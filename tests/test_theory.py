@@ -57,6 +57,21 @@ def test_coil_geometry_section_2(cfg):
     assert th.rotation_for_coiled_length(spiral, r_hub, tp.h) == pytest.approx(36.0, rel=1e-12)
 
 
+def test_max_hub_angle_winds_the_whole_tape():
+    L, r_hub, h = 0.5, 0.0127, 1e-4
+    theta = th.max_hub_angle(L, r_hub, h)
+    # the brief's "about 38.5 rad" is Eq. 4.3 with r = r_hub + h theta / (2 pi); the model's
+    # mid-surface spiral starts at r_hub + h/2 and runs out 0.4 % earlier
+    assert theta == pytest.approx(38.30, abs=0.01)
+    eq_4_3 = th.coiled_length_from_radius(th.outer_radius_after_rotation(38.444, r_hub, h), r_hub, h)
+    assert close(eq_4_3, L, rel=1e-4)
+    # inverse consistency: theta winds exactly L; by Eq. 4.3 its coil holds 0.4 % less
+    assert th.coiled_length_from_rotation(theta, r_hub, h) == pytest.approx(L, rel=1e-12)
+    r = th.outer_radius_after_rotation(theta, r_hub, h)
+    assert th.coiled_length_from_radius(r, r_hub, h) == pytest.approx(L * (1 - 0.0037), rel=1e-3)
+    assert theta > 36.0  # the default hub angle fits
+
+
 def test_stored_energy_section_3(cfg):
     tp, r_hub = cfg.tape, cfg.hub.radius
     assert th.energy_density(tp.R, tp.R, tp.D, tp.nu) == pytest.approx(tp.mu, rel=1e-12)
@@ -106,6 +121,24 @@ def test_coiling_tension_section_5(cfg):
     assert grow["tension"][0] == pytest.approx(
         th.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, r_c), rel=1e-12
     )
+
+
+def test_required_coiling_tension_on_the_mid_surface(cfg):
+    tp, r_c = cfg.tape, cfg.hub.radius
+    rho = r_c + tp.h / 2
+    T, source = th.required_coiling_tension(tp.D, tp.alpha, tp.R, r_c, tp.h)
+    assert source == "Eq. 2.6"
+    assert T == pytest.approx(tp.D * tp.b / 2 * (1 / rho**2 - 1 / tp.R**2), rel=1e-12)
+    assert close(T, 0.374)  # a few per cent below the 0.384 N of r_c itself (physics brief section 10)
+    # the brief's example: r_c/R = 0.9 needs 0.2095 N with r_c + h/2
+    assert close(th.required_coiling_tension(tp.D, tp.alpha, tp.R, 0.9 * tp.R, tp.h)[0], 0.2095)
+    # a mid-surface just looser than R needs no pull: not a negative one
+    assert th.required_coiling_tension(tp.D, tp.alpha, tp.R, tp.R, tp.h) == (0.0, "Eq. 2.6")
+    # loss of uniqueness: no law
+    assert th.required_coiling_tension(tp.D, tp.alpha, tp.R, 2 * tp.R, tp.h) is None
+    T, source = th.required_coiling_tension(tp.D, tp.alpha, tp.R, 4 * tp.R, tp.h)
+    assert source == "Eq. 2.9"
+    assert T == pytest.approx(th.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, 4 * tp.R + tp.h / 2))
 
 
 @pytest.mark.parametrize(
@@ -197,7 +230,10 @@ def test_predictions_reproduce_the_physics_brief_numbers(cfg):
 def test_predictions_pick_the_tension_law_of_the_regime(hub_over_R, source):
     from tapecoil.config import config_from_dict
 
-    cfg = config_from_dict({"hub": {"radius": hub_over_R * 0.0151}})
+    # 5 rad fits the 0.5 m tape on every hub; 10 N is more than Eq. 2.9 asks for on 4 R
+    cfg = config_from_dict(
+        {"hub": {"radius": hub_over_R * 0.0151}, "coiling": {"hub_angle": 5.0, "tension": 10.0}}
+    )
     p = {x.key: x for x in th.predictions(cfg)}
     if source is None:
         assert "coiling_tension" not in p  # loss of uniqueness: no single tension

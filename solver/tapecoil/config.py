@@ -3,7 +3,11 @@
 The defaults are the benchmark tape of the physics brief (thesis Table 3.1, annealed BeCu) and
 its loading (Table 3.2). Every field carries its unit and its allowed range in the field
 metadata; :func:`load_config` refuses an unknown key, a wrong type or an out-of-range value
-with a :class:`ConfigError` that names the key (``tape.h``) and what is allowed.
+with a :class:`ConfigError` that names the key (``tape.h``) and what is allowed. It also
+refuses a hub rotation longer than the tape can give, so that it is not found only after hours
+of computing. A pull below the tension the hub needs is no error: :meth:`Config.coiling_warnings`
+names it, and the commands that start a coiling warn of it (:class:`ConfigWarning`) before
+computing; loading a configuration (for a report, a plot, a tension study) does not.
 """
 
 from __future__ import annotations
@@ -23,6 +27,10 @@ else:  # pragma: no cover - Python 3.10 (conda environments)
 
 class ConfigError(ValueError):
     """A configuration value that cannot be used; the message names the key and the range."""
+
+
+class ConfigWarning(UserWarning):
+    """A configuration that can be run but is unlikely to give what it asks for; names the key."""
 
 
 @dataclass(frozen=True)
@@ -263,16 +271,33 @@ class ContactConfig:
     """Penalty contact with the hub and between turns.
 
     Attributes:
+        turns: what keeps the turns apart: 'spiral' (the ideal spiral r_hub + n h as a rigid
+            obstacle, from each point's winding angle) or 'surface' (contact of the tape's real
+            surfaces with each other, two-sided, from the current geometry; slow and not yet
+            robust where a turn climbs over the root end: see the README).
         penalty: penalty stiffness per unit area [N/m^3]; 0 derives it from the shell stiffness
             and the mesh size (see the contact module).
         penalty_scale: factor on the derived penalty [-].
         smoothing: width of the smoothed contact bracket as a fraction of the thickness h [-];
             0 is the plain bracket max(g, 0) (see the contact module for the trade-off).
+        stop_penetration: deepest penetration of the hub or of the tape's own turns, as a
+            fraction of the thickness h, that a run accepts [-], in (0, 100] (the default h: the
+            faces overlap by a whole thickness and the penalty no longer holds the tape's
+            shape); a run that goes deeper stops with a message naming it, its state saved.
+            Equal-sense coiling starts with the section's edges inside the hub until the root
+            is flattened onto it, and needs more.
+        search_margin: ('surface') buffer of the contact search between turns, as a fraction of the
+            thickness h [-], > 0: candidate partners within h (1 + search_margin) are kept, and
+            the search is repeated only when a point has moved more than search_margin h / 2
+            since the last search.
     """
 
+    turns: str = param("spiral", "", ("spiral", "surface"))
     penalty: float = param(0.0, "N/m^3", NON_NEGATIVE)
     penalty_scale: float = param(1.0, "-", POSITIVE)
     smoothing: float = param(0.05, "-", Range(0.0, 1.0))
+    stop_penetration: float = param(1.0, "-", Range(0.0, 100.0, lo_open=True))
+    search_margin: float = param(2.0, "-", POSITIVE)
 
 
 @dataclass
@@ -351,6 +376,49 @@ class Config:
             raise ConfigError(
                 f"hub.radius = {self.hub.radius:g} m must exceed twice tape.h = {self.tape.h:g} m"
             )
+        self.check_coiling()
+
+    def check_coiling(self) -> None:
+        """Refuse a hub rotation the tape is too short for (part of :meth:`check`).
+
+        Raises :class:`ConfigError` naming ``coiling.hub_angle`` when the hub angle exceeds
+        :func:`tapecoil.theory.max_hub_angle`.
+        """
+        from tapecoil import theory  # theory imports this module
+
+        tp, r_hub, coiling = self.tape, self.hub.radius, self.coiling
+        largest = theory.max_hub_angle(tp.L, r_hub, tp.h)
+        if coiling.hub_angle > largest:
+            raise ConfigError(
+                f"coiling.hub_angle = {coiling.hub_angle:g} rad is more than the tape can coil: "
+                f"the whole tape (tape.L = {tp.L:g} m) is on the hub (hub.radius = {r_hub:g} m, "
+                f"tape.h = {tp.h:g} m per turn) after {largest:.4g} rad ({largest / (2 * math.pi):.3g} "
+                f"turns), the largest hub angle this tape allows"
+            )
+
+    def coiling_warnings(self) -> list[str]:
+        """What is likely to keep a coiling run from its goal: a message per finding, naming its key.
+
+        Empty when nothing is. Today one finding: ``coiling.tension`` below
+        :func:`tapecoil.theory.required_coiling_tension`, the pull the hub needs. Not part of
+        :meth:`check`: the commands that coil (``tapecoil coil``, ``run``, the coil and run
+        sweeps) warn of these just before they start; loading a configuration for anything else
+        (a report, a plot, a tension study with its own pull) stays quiet.
+        """
+        from tapecoil import theory  # theory imports this module
+
+        tp, r_hub, coiling = self.tape, self.hub.radius, self.coiling
+        needed = theory.required_coiling_tension(tp.D, tp.alpha, tp.R, r_hub, tp.h)
+        # in the non-unique regime no law gives the tension (see required_coiling_tension)
+        if needed is None or coiling.tension >= needed[0]:
+            return []
+        return [
+            f"coiling.tension = {coiling.tension:g} N is below the {needed[0]:.3g} N the hub needs "
+            f"({needed[1]} at the first turn's mid-surface radius hub.radius + tape.h/2 = "
+            f"{r_hub + tp.h / 2:g} m): with too little pull the tape does not wrap onto the hub "
+            f"and the coiling stalls (with no pull the benchmark tape stalls at 2.49 rad on the "
+            f"coarse mesh)"
+        ]
 
 
 def _type_name(tp: Any) -> str:

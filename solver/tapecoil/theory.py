@@ -104,6 +104,17 @@ def rotation_for_coiled_length(x: float, r_hub: float, h: float) -> float:
     return 2 * x / (b + math.sqrt(b * b + 4 * a * x))
 
 
+def max_hub_angle(L: float, r_hub: float, h: float) -> float:
+    """Largest hub rotation [rad] a tape of length L allows: the rotation that winds all of it.
+
+    The mid-surface spiral of :func:`coiled_length_from_rotation` is what the model winds, so its
+    inverse at x = L is where no free length is left to pull. Eq. 4.3 with the outer radius
+    r_hub + h theta / (2 pi) puts the first turn on r_hub instead of r_hub + h/2 and allows
+    0.4 % more: 38.44 rad against 38.30 rad for the benchmark tape (L = 0.5 m, r_hub = 12.7 mm).
+    """
+    return rotation_for_coiled_length(L, r_hub, h)
+
+
 def stored_energy(theta: float, r_hub: float, h: float, R: float, alpha: float, D: float, nu: float) -> float:
     """Strain energy [J] of the flattened tape wound by a hub rotation theta (section 3).
 
@@ -160,6 +171,30 @@ def coiling_tension_bending(D: float, alpha: float, R: float, r_c: float) -> flo
 def coiling_tension_tension_dominated(D: float, alpha: float, R: float, r_c: float) -> float:
     """Eq. 2.9: T = 48 D (1 - cos(alpha/2)) / (alpha^3 R) * (r_c / R) [N]."""
     return 48 * D * (1 - math.cos(alpha / 2)) / (alpha**3 * R) * (r_c / R)
+
+
+def required_coiling_tension(
+    D: float, alpha: float, R: float, r_hub: float, h: float
+) -> tuple[float, str] | None:
+    """The pull [N] a tape needs to wrap onto a hub of radius r_hub, with the law it comes from.
+
+    The laws concern the first turn's mid-surface, rho = r_hub + h/2 (physics brief section 10);
+    the regime is that of r_hub / R, as in :func:`coiling_regime`:
+
+    - bending-dominated (r_hub/R <= 1): Eq. 2.6, (D b / 2)(1/rho^2 - 1/R^2), not below 0 (a
+      mid-surface looser than R needs no pull by it); 0.374 N for the benchmark tape;
+    - tension-dominated (r_hub/R >= 3.424): Eq. 2.9 with rho;
+    - loss of uniqueness in between: None. No law gives the tension there: Eq. 2.6 is negative
+      once rho > R, so as a lower estimate it bounds nothing, and Eq. 2.9 is derived for the
+      tension-dominated regime only.
+    """
+    rho = r_hub + h / 2
+    regime = coiling_regime(r_hub, R)
+    if regime == "bending":
+        return max(coiling_tension_bending(D, alpha, R, rho), 0.0), "Eq. 2.6"
+    if regime == "tension":
+        return coiling_tension_tension_dominated(D, alpha, R, rho), "Eq. 2.9"
+    return None
 
 
 def coil_radius_during_deployment(lam: float | np.ndarray, r_hub: float, h: float, L: float):

@@ -1,7 +1,11 @@
 """Command line: ``tapecoil theory [config.toml] [--json]`` and the simulation commands.
 
 Configuration errors are reported as one line naming the key and the allowed range, with
-exit status 2, before anything is computed. Output is printed by MPI rank 0 only.
+exit status 2, before anything is computed. The commands that coil (``coil``, ``run``, the coil
+and run sweeps) also warn, before computing, of what is likely to keep the coiling from its goal
+(:meth:`tapecoil.config.Config.coiling_warnings`): a ConfigWarning, shown as one line
+``tapecoil: warning: ...`` on stderr, and the same in the run's run.log. Output is printed by
+MPI rank 0 only.
 """
 
 from __future__ import annotations
@@ -11,9 +15,10 @@ import json
 import math
 import os
 import sys
+import warnings
 
 from tapecoil import __version__
-from tapecoil.config import ConfigError, load_config
+from tapecoil.config import ConfigError, ConfigWarning, load_config
 
 
 def _rank() -> int:
@@ -34,6 +39,54 @@ def _rank() -> int:
 def _echo(text: str = "") -> None:
     if _rank() == 0:
         print(text, flush=True)
+
+
+def warn_before_coiling(
+    config, directory=None, comm=None, prefix: str = "", console: bool = True
+) -> list[str]:
+    """Warn of what is likely to keep a coiling from its goal, before anything is computed.
+
+    Each of ``config.coiling_warnings()``, with ``prefix`` before it (a sweep names its case):
+    when ``console``, as a :class:`ConfigWarning` (for callers that catch or record warnings)
+    and as the line ``tapecoil: warning: ...`` on stderr; when a directory is given, into its
+    run.log (created; the run appends to it). By rank 0 of ``comm`` only (no ``comm``: this
+    process). Returns the messages (on every rank).
+
+    The line is printed, not left to Python's display of the warning: once FFCx is imported
+    (by DOLFINx, before any run) it sends warnings to the logging module, where nobody shows them.
+    """
+    messages = [prefix + m for m in config.coiling_warnings()]
+    if not messages or (comm is not None and comm.rank != 0):
+        return messages
+    if console:
+        for message in messages:
+            warnings.warn(message, ConfigWarning, stacklevel=2)
+            print(f"tapecoil: warning: {message}", file=sys.stderr, flush=True)
+    if directory is not None:
+        from pathlib import Path
+
+        from mpi4py import MPI
+
+        from tapecoil.app import results
+
+        Path(directory).mkdir(parents=True, exist_ok=True)
+        handler = results.start_log(directory, MPI.COMM_SELF)  # this rank is rank 0 of comm
+        try:
+            for message in messages:
+                results.LOG.warning("configuration: %s", message)
+        finally:
+            results.stop_log(handler)
+    return messages
+
+
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """Nothing for a ConfigWarning (printed already, see warn_before_coiling); others as Python does."""
+    if issubclass(category, ConfigWarning):
+        return ""
+    return _PYTHON_FORMAT_WARNING(message, category, filename, lineno, line)
+
+
+_PYTHON_FORMAT_WARNING = warnings.formatwarning  # Python's own, whatever main finds set
 
 
 # Display units for the table: (SI unit, key) -> (factor, shown unit)
@@ -202,6 +255,9 @@ def cmd_coil(args: argparse.Namespace) -> int:
     config = _with_mesh(load_config(args.config), args.mesh)
     directory = args.out or f"{config.output.directory}/coil"
     checkpoint = _resume_path(args.resume, directory, "stowed")
+    from mpi4py import MPI
+
+    warn_before_coiling(config, directory, MPI.COMM_WORLD)
     summary = run(
         config,
         directory,
@@ -255,6 +311,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     directory = args.out or f"{config.output.directory}/run"
     if args.resume:
         _resume_path("", directory, "stowed")
+    from mpi4py import MPI
+
+    warn_before_coiling(config, directory, MPI.COMM_WORLD)
     summary = run(
         config,
         directory,
@@ -533,12 +592,15 @@ def main(argv: list[str] | None = None) -> int:
     ours, petsc = split_petsc_options(argv, _known_options(parser))
     args = parser.parse_args(ours)
     take_back = _hand_to_petsc(petsc)
+    # a ConfigWarning is printed as one line where it is issued; Python's display would repeat it
+    shown_as, warnings.formatwarning = warnings.formatwarning, _format_warning
     try:
         return args.func(args)
     except ConfigError as exc:
         print(f"tapecoil: configuration error: {exc}", file=sys.stderr)
         return 2
     finally:
+        warnings.formatwarning = shown_as
         take_back()
 
 

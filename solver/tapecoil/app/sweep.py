@@ -15,7 +15,11 @@ with a ``[sweep]`` table::
 
 Parameters are configuration keys ("tape.h", "coiling.tension", ...) or "hub.radius_over_R",
 the hub radius as a fraction of tape.R. Every case's configuration is checked before anything is
-computed. Under ``mpirun -n N`` the ranks form N / ranks_per_case groups, and case i runs on group
+computed; in the coil and run studies, rank 0 also warns then of each case's pull below the
+tension its hub needs (``Config.coiling_warnings``, the message in the case's run.log too; the
+coiling_tension study sets its own pull, T = Eq. 2.6 + excess, and its own hub angle and tape
+length, so it warns of nothing, but each case's configuration, hub_angle included, must still
+be valid). Under ``mpirun -n N`` the ranks form N / ranks_per_case groups, and case i runs on group
 i mod groups, each into its own results directory ``case-NN-<values>``. Rank 0 then writes the
 summary table (sweep_summary.csv, sweep_summary.json) and a plot (sweep.png: the coiling tension
 against r_c/R with Eq. 2.6 and Eq. 2.9 drawn in, or each validated quantity's ratio to its
@@ -157,6 +161,11 @@ def run_sweep(sweep: Sweep, directory: str | Path, comm=MPI.COMM_WORLD, progress
         directory.mkdir(parents=True, exist_ok=True)
     comm.barrier()
     cases = sweep.cases()
+    if sweep.study != "coiling_tension" and comm.rank == 0:
+        from tapecoil.app.cli import warn_before_coiling
+
+        for case in cases:  # every case's, before any case is computed
+            warn_before_coiling(sweep.config(case), prefix=f"sweep case {case}: ")
     mine = [(i, case) for i, case in enumerate(cases) if i % groups == group]
     bar = None
     if progress and comm.rank == 0:
@@ -193,8 +202,11 @@ def _run_case(sweep: Sweep, index: int, case: dict, directory: Path, comm) -> No
                 json.dumps({"case": case, "coiling_tension": result}, indent=2)
             )
         return
+    from tapecoil.app.cli import warn_before_coiling
     from tapecoil.app.pipeline import run
 
+    # the console had it from run_sweep; the case's own log has it here
+    warn_before_coiling(config, directory, comm, prefix=f"sweep case {case}: ", console=False)
     phases = ("coiling",) if sweep.study == "coil" else ("coiling", "deployment")
     summary = run(config, directory, phases=phases, comm=comm, progress=False, report=False, command="sweep")
     if comm.rank == 0:
