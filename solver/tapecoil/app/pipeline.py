@@ -78,6 +78,12 @@ def run(
                     stop=stop,
                     resume=resume_deploy,
                 )
+        from tapecoil.measures.separation import separation_measure
+
+        for phase, phase_summary in out.items():
+            separation = separation_measure(directory, phase, comm)
+            if separation is not None:
+                phase_summary["measures"]["turn_separation"] = separation
         summary = results.run_summary(out, started, comm)
         results.write_summary(directory, summary, comm)
         if (config.output.report if report is None else report) and not summary["interrupted"]:

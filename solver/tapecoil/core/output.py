@@ -32,9 +32,9 @@ class ShellWriter:
 
     With ``snapshots`` (a directory) every write also gathers the deformed surface and its
     longitudinal curvature on rank 0 into ``<phase>_<n>.npz`` there (points and values; the
-    cells once, in ``<phase>_cells.npz``), from which pictures are made without ParaView and
-    whatever the number of ranks. ``first_index`` numbers the first snapshot (a resumed run
-    goes on counting).
+    cells and the points' reference coordinates ``xi`` once, in ``<phase>_cells.npz``), from
+    which pictures are made without ParaView and whatever the number of ranks. ``first_index``
+    numbers the first snapshot (a resumed run goes on counting).
     """
 
     def __init__(
@@ -71,11 +71,11 @@ class ShellWriter:
         if self.snapshots is not None:
             cells, types, x = dolfinx.plot.vtk_mesh(V3)
             self._local_points = x
-            pieces = mesh.comm.gather((cells, types, x.shape[0]), root=0)
+            pieces = mesh.comm.gather((cells, types, x.shape[0], x[:, :2].copy()), root=0)
             if mesh.comm.rank == 0:
                 self.snapshots.mkdir(parents=True, exist_ok=True)
                 merged, offset = [], 0
-                for piece_cells, _, n_points in pieces:
+                for piece_cells, _, n_points, _ in pieces:
                     if piece_cells.size:  # VTK layout: node count, then the nodes, per cell
                         c = piece_cells.reshape(-1, piece_cells[0] + 1).copy()
                         c[:, 1:] += offset
@@ -85,6 +85,8 @@ class ShellWriter:
                     self.snapshots / f"{phase}_cells.npz",
                     cells=np.concatenate(merged),
                     types=np.concatenate([p[1] for p in pieces]),
+                    # the points' reference (material) coordinates, in the order of every snapshot
+                    xi=np.vstack([p[3] for p in pieces]),
                 )
 
     def write(self, t: float) -> None:
