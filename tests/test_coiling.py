@@ -74,7 +74,7 @@ def test_obstacle_staircase_climbs_one_thickness_per_turn():
         [0.0, 2 * math.pi - w - 1e-9, 2 * math.pi - w / 2, 2 * math.pi, 3 * math.pi, 4 * math.pi + 0.1]
     )
     expected = np.array([r, r, r + h / 2, r + h, r + h, r + 2 * h])
-    assert np.allclose(c.obstacle_radius(psi), expected, rtol=0, atol=1e-15)
+    assert np.allclose(c.spiral_radius(psi), expected, rtol=0, atol=1e-15)
 
 
 def test_winding_angle_is_unwrapped_from_step_to_step():
@@ -290,7 +290,9 @@ def test_equal_sense_coil_curves_with_its_section_and_flattens_on_the_hub(coiled
     from tapecoil.phases.coiling_run import CoilingRun
 
     cfg = short_tape(hub_angle=2 * math.pi)
-    cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, sense="equal"))
+    # the section's edges start inside the hub (the equal-sense section curves towards it)
+    contact = dataclasses.replace(cfg.contact, stop_penetration=100.0)
+    cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, sense="equal"), contact=contact)
     model = CoilingModel(cfg, MPI.COMM_SELF)
     result = CoilingRun(model).run()
     assert result.completed, result.message

@@ -87,6 +87,11 @@ class SNESSolver:
         self.A = dolfinx.fem.petsc.create_matrix(self.J_form)
         self.norms: list[float] = []
         self.point_forces: list[PointForce] = []
+        # assembled terms beyond the forms (contact between distant parts of the mesh): objects
+        # with add_residual(b) and add_jacobian(A), called with the state in place, after the
+        # forms and before the Dirichlet rows are set; add_jacobian returns True when it has
+        # widened A's nonzero pattern
+        self.terms: list = []
         # cumulative wall times [s]: residual and Jacobian assembly, and whole solves
         self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
 
@@ -147,6 +152,8 @@ class SNESSolver:
         dolfinx.fem.petsc.assemble_vector(b, self.F_form)
         dolfinx.fem.petsc.apply_lifting(b, [self.J_form], bcs=[self.bcs], x0=[self.q.x.petsc_vec], alpha=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        for term in self.terms:
+            term.add_residual(b)
         with b.localForm() as b_local:
             for force in self.point_forces:
                 b_local.array[force.dofs] -= force.magnitude.value  # residual = internal - external
@@ -158,7 +165,12 @@ class SNESSolver:
         self._update_state(x)
         A.zeroEntries()
         compat.assemble_matrix(A, self.J_form, self.bcs)
+        widened = [term.add_jacobian(A) for term in self.terms]
         A.assemble()
+        if any(widened):
+            # a widened pattern replaces A's storage (PETSc's header merge), which the
+            # factorisation does not notice: make it analyse the new pattern afresh
+            self.snes.getKSP().getPC().reset()
         self.timings["jacobian"] += time.perf_counter() - t0
 
     def solve(self) -> SolveResult:

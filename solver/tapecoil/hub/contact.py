@@ -1,38 +1,45 @@
-"""Penalty contact of the tape's inner face with the rigid hub and with the turns beneath it.
+"""Penalty contact of the tape's inner face with the rigid hub, and what keeps the turns apart.
 
 The hub is a rigid cylinder (axis along y, radius r_hub, placed and turned by a
-:class:`~tapecoil.hub.frame.HubFrame`). A tape wound on it is a spiral: the mid-surface of turn
-n lies at r_hub + h/2 + n h (physics.md Sec. 2), so the inner face (the mid-surface moved h/2
-along the director towards the hub) of a point on turn n must stay outside r_hub + n h, the
-outer face of the turn beneath. Rather than searching for the nearest point of the turn below
-(general self-contact), every point carries its winding angle psi: the angle it has been carried
-round the hub, measured in the hub's rotating frame from the root. psi is updated between load
-steps from the converged state and unwrapped continuously (a point never moves by half a turn
-in one step), so that points of successive turns, which share a polar angle, keep their turn.
-The obstacle radius is then the staircase
+:class:`~tapecoil.hub.frame.HubFrame`). Penetration g = r_obs - |P - a|_xz > 0 of the face
+towards the hub (P the mid-surface point moved h/2 along the director, a the axis) into an
+obstacle of radius r_obs costs the penalty energy k/2 <g>^2 per unit reference area. Two
+models keep the turns apart (``contact.turns``):
 
-    r_obs(psi) = r_hub + h sum_{k>=1} ramp((psi - 2 pi k) / w + 1),
+- ``"spiral"``: the obstacle is the ideal spiral. A tape wound on the hub has the mid-surface
+  of turn n at r_hub + h/2 + n h (physics.md Sec. 2), so every point carries its winding angle
+  psi (the angle it has been carried round the hub, measured in the hub's rotating frame from
+  the root; updated between load steps from the converged state and unwrapped continuously, so
+  that points of successive turns, which share a polar angle, keep their turn), and the
+  obstacle is the staircase
 
-which climbs by h over the last w radians of every turn: there the turn passes over the root
-end (and, later, over the step every turn inherits from it). ramp is the C1 smoothstep on
-[0, 1]; w is about two elements, so that the climb is resolved.
+      r_obs(psi) = r_hub + h sum_{k>=1} ramp((psi - 2 pi k) / w + 1),
 
-Penetration g = r_obs - |P - a|_xz > 0 (P the inner-face point, a the axis) costs the penalty
-energy k/2 <g>^2 per unit reference area. The bracket <g> is smoothed over a width delta
-(delta softplus(g/delta), ``contact.smoothing`` = delta/h, default 1/20): with the plain bracket
-Newton cycles as nodes enter and leave contact. Newton iterations (all attempts) on the coarse
-benchmark to 6 rad, final step settings: 885 plain, 579 with delta = h/20, 1533 with h/200;
-energies equal to 4e-6 and the same largest penetration (0.1 h). The price of h/20: the tape
-rests a few delta (5 um) off the coil and, near the lift-off point, that extra support lowers
-the coiling tension (the axial-force balance of the coiling module) by about 0.03 N. So the
-coiling-tension study uses the plain bracket.
+  which climbs by h over the last w radians of every turn, where the turn passes over the root
+  end. ramp is the C1 smoothstep on [0, 1]; w is about two elements. The turns rest on a
+  prescribed surface: an outer turn's load does not reach the inner ones, and the turns' radii
+  are imposed, not predicted.
+- ``"surface"``: the obstacle is the hub alone, r_obs = r_hub, with a fairing behind the root
+  clamp (:meth:`CoilContact.fairing_height`); the turns are kept apart by the contact of the
+  tape's real surfaces with each other (:mod:`tapecoil.contact.self_contact`).
+
+The winding angle is kept in both: the predictor, the measures and the pictures use it.
+
+The bracket <g> is smoothed over a width delta (delta softplus(g/delta), ``contact.smoothing``
+= delta/h, default 1/20): with the plain bracket Newton cycles as nodes enter and leave
+contact. Newton iterations (all attempts) on the coarse benchmark to 6 rad, final step
+settings, spiral: 885 plain, 579 with delta = h/20, 1533 with h/200; energies equal to 4e-6
+and the same largest penetration (0.1 h). The price of h/20: the tape rests a few delta (5 um)
+off the coil and, near the lift-off point, that extra support lowers the coiling tension (the
+axial-force balance of the coiling module) by about 0.03 N. So the coiling-tension study uses
+the plain bracket.
 
 The default stiffness k = E h / (100 l^2) (l the element length along the tape) makes the
 contact stiffness of an element, k l^2, one hundredth of the membrane stiffness E h of the
-element it pushes on. Measured on the benchmark coarse mesh: with
-k l^2 = E h, Newton chattered between contact sets and the run stalled at 3 rad; with E h / 100
-it coils the whole 36 rad with the largest penetration about 0.4 h (at the climbs over the root
-step, at the end of the run) and typically below 0.1 h; with E h / 10^4 the turns sank by 3 h.
+element it pushes on. Measured on the benchmark coarse mesh with the spiral: with k l^2 = E h,
+Newton chattered between contact sets and the run stalled at 3 rad; with E h / 100 it coils
+the whole 36 rad with the largest penetration about 0.4 h (at the climbs over the root step, at
+the end of the run) and typically below 0.1 h; with E h / 10^4 the turns sank by 3 h.
 """
 
 from __future__ import annotations
@@ -47,6 +54,9 @@ from tapecoil.core.smoothing import smoothstep, smoothstep_ufl
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, Nodes
 
+# what keeps the turns apart: the ideal spiral as an obstacle, or the turns' real surfaces
+TURN_MODELS = ("spiral", "surface")
+
 
 def default_penalty(E: float, h: float, element_length: float) -> float:
     """Penalty stiffness per unit area [N/m^3]: element contact stiffness E h / 100."""
@@ -54,10 +64,10 @@ def default_penalty(E: float, h: float, element_length: float) -> float:
 
 
 class CoilContact:
-    """Contact of the tape's inner face with the hub and the wound turns (penalty, lagged psi).
+    """Contact of the tape's inner face with the hub (penalty), and the winding angles.
 
-    ``frame`` places the hub and gives its radius; ``max_turns`` bounds the number of turns the
-    staircase holds; ``ramp_width`` [rad] is w of the module docstring.
+    ``frame`` places the hub and gives its radius; ``max_turns`` bounds the number of turns of
+    the ideal spiral; ``ramp_width`` [rad] is its climb w (see the module docstring).
     """
 
     def __init__(
@@ -68,6 +78,7 @@ class CoilContact:
         max_turns: int,
         ramp_width: float,
         smoothing: float = 0.0,
+        turns: str = "spiral",
     ):
         self.model = model
         self.frame = frame
@@ -88,17 +99,32 @@ class CoilContact:
         self.smoothing = smoothing
         face = self._face(model.phi, model.d)
         self.radius = ufl.sqrt(face[0] ** 2 + face[2] ** 2)
-        steps = sum(
-            smoothstep_ufl((self.psi - 2 * math.pi * k) / ramp_width + 1.0) for k in range(1, max_turns + 1)
-        )
-        self.obstacle = r_hub + h * steps
+        if turns not in TURN_MODELS:
+            raise ValueError(f"contact between turns must be one of {TURN_MODELS}, got {turns!r}")
+        self.turns = turns
+        self.hub_turn = dolfinx.fem.Constant(model.mesh, 0.0)
+        if turns == "spiral":
+            steps = sum(
+                smoothstep_ufl((self.psi - 2 * math.pi * k) / ramp_width + 1.0)
+                for k in range(1, max_turns + 1)
+            )
+            self.obstacle = r_hub + h * steps
+            # the hub carries the first turn up to the start of its climb; beyond, turns carry turns
+            on_hub = ufl.conditional(ufl.lt(self.psi, 2 * math.pi - ramp_width), 1.0, 0.0)
+        else:
+            # the hub's fairing behind the root clamp (see fairing_height), turned with the hub
+            swept = frame.sign * ufl.atan2(face[2], face[0]) - 0.5 * math.pi - self.hub_turn
+            behind = ufl.atan2(ufl.sin(swept), ufl.cos(swept))  # wrapped to (-pi, pi]
+            on = ufl.And(ufl.gt(behind, 1e-6 * ramp_width), ufl.lt(behind, ramp_width))
+            self.obstacle = r_hub + h * ufl.conditional(on, 1.0, 0.0) * smoothstep_ufl(
+                1.0 - behind / ramp_width
+            )
+            on_hub = 1.0
         self.penetration = self._bracket(self.obstacle - self.radius)
-        # the hub carries the first turn up to the start of its climb; beyond, turns carry turns
-        self.on_hub = ufl.conditional(ufl.lt(self.psi, 2 * math.pi - ramp_width), 1.0, 0.0)
         density = 0.5 * self.stiffness * self.penetration**2 * model.jacobian
         self.energy = density * model.dx
-        self.energy_hub = self.on_hub * density * model.dx
-        self.energy_coil = (1.0 - self.on_hub) * density * model.dx
+        self.energy_hub = on_hub * density * model.dx
+        self.energy_coil = (1.0 - on_hub) * density * model.dx if turns == "spiral" else None
         self.hub_angle = 0.0
 
     def _face(self, phi, d):
@@ -117,13 +143,14 @@ class CoilContact:
         """Contact virtual work in the direction dq, energy-consistent from q_old to q.
 
         The penalty energy P(g) = k/2 <g>^2 of a quadrature point depends on the state through
-        the gap g = r_obs - rho only, rho = |face|_xz the face point's distance from the axis. Its
-        force is written as the secant slope (P(g1) - P(g0)) / (g1 - g0) (the tangent at the mean
-        gap when the gap hardly changes) times a variation of g that is exact along the step:
+        the gap g = r_obs - rho only (r_obs the obstacle's radius, rho = |face|_xz the face
+        point's distance from the axis). Its force is written as the secant slope
+        (P(g1) - P(g0)) / (g1 - g0) (the tangent at the mean gap when the gap hardly changes)
+        times a variation of g that is exact along the step:
         rho1 - rho0 = (f0 + f1) . (f1 - f0) / (rho0 + rho1) in the xz-plane, with the director
         varied by ``director_variation`` (:meth:`NaghdiShell.director_variation`). Then the work
-        along the step is the change of the contact energy (the winding angles, which fix the
-        obstacle, are held through a step).
+        along the step is the change of the contact energy (the winding angles and the hub, which
+        place the obstacle, are held through a step).
         """
         m = self.model
         _, _, _, d0 = m.kinematics(q_old)
@@ -147,8 +174,9 @@ class CoilContact:
         dg = -((f0[0] + f1[0]) * dface[0] + (f0[2] + f1[2]) * dface[2]) / (rho0 + self.radius)
         return slope * dg * m.jacobian * m.dx
 
-    def obstacle_radius(self, psi: np.ndarray) -> np.ndarray:
-        """The staircase r_obs(psi) [m] in numpy (as in the forms)."""
+    def spiral_radius(self, psi: np.ndarray) -> np.ndarray:
+        """The radius [m] of the outer face of the turn beneath a point of winding angle psi on
+        the ideal spiral (r_hub on the first turn, + h per turn, climbing over the root end)."""
         k = np.arange(1, self.max_turns + 1)[:, None]
         ramps = smoothstep((psi[None, :] - 2 * math.pi * k) / self.ramp_width + 1.0)
         return self.r_hub + self.h * np.sum(ramps, axis=0)
@@ -157,11 +185,31 @@ class CoilContact:
         """Distance from the axis and swept angle (:meth:`HubFrame.polar`) of points (3, n)."""
         return self.frame.polar(points)
 
+    def turn(self, hub_angle: float) -> None:
+        """Place the hub (its fairing) at the hub angle ``hub_angle`` [rad] (while it turns)."""
+        self.hub_turn.value = hub_angle
+
+    def fairing_height(self, swept: np.ndarray) -> np.ndarray:
+        """Height [m] of the hub's surface above r_hub at swept angles ``swept`` (numpy).
+
+        Behind the root's end (the angles the root has left, 0 < swept - hub angle < w) the hub
+        carries a fairing that rises smoothly to the root's thickness h at the root's end, as a
+        hub's clamp does: the end of the first turn climbs it onto the root instead of onto a
+        step of height h, which a mesh coarser than h cannot follow.
+        """
+        behind = np.angle(np.exp(1j * (swept - float(self.hub_turn.value))))
+        on = (behind > 1e-6 * self.ramp_width) & (behind < self.ramp_width)
+        return np.where(on, self.h * smoothstep(1.0 - behind / self.ramp_width), 0.0)
+
     def nodal_penetration(self) -> np.ndarray:
-        """Penetration r_obs - r [m] of the inner face at this rank's nodes (negative: a gap)."""
+        """Penetration [m] of the inner face into the obstacle (the hub and its fairing, or the
+        spiral's turn beneath) at this rank's nodes (negative: a gap)."""
         q = self.model.q.x.array
         face = self.nodes.positions(q) + self.face_offset * self.nodes.directors(q)
-        return self.obstacle_radius(self.psi.x.array) - self.polar(face)[0]
+        radius, swept = self.polar(face)
+        if self.turns == "spiral":
+            return self.spiral_radius(self.psi.x.array) - radius
+        return self.r_hub + self.fairing_height(swept) - radius
 
     def _lab_angles(self) -> np.ndarray:
         return self.polar(self.nodes.positions(self.model.q.x.array))[1]

@@ -147,7 +147,7 @@ def lift_off(tape, gap_factor: float) -> dict[str, float]:
     n_owned = nodes.space.dofmap.index_map.size_local
     q = tape.model.q.x.array
     face = nodes.positions(q) + c.face_offset * nodes.directors(q)
-    obstacle = c.obstacle_radius(c.psi.x.array)
+    obstacle = c.spiral_radius(c.psi.x.array)
     gap = c.polar(face)[0] - obstacle
     xi = nodes.xi[:, :n_owned]
     centre = tape.centre_nodes()

@@ -107,6 +107,7 @@ class CoilingModel:
             defaults={"pc_type": "cholesky"},
             options=config.coiling.petsc_options,
         )
+        self.solver.terms += tape.contact_terms(model.q, bcs)
         self._reaction_form = None
         self.predictor = choose_predictor(config.coiling.predictor, self.element_length, tape.r_hub)
         self.predictions = CoilingPredictor(tape, self.predictor, comm)
@@ -114,18 +115,22 @@ class CoilingModel:
     # -- loading --------------------------------------------------------------------------
     def set_flattening(self, f: float) -> None:
         self.root.set(f, 0.0)
+        self.contact.turn(0.0)
         self.tension.value = f * self.config.coiling.tension
 
     def set_hub_angle(self, angle: float) -> None:
         self.root.set(1.0, angle)
+        self.contact.turn(angle)
 
     def predict(self, angle_from: float, angle_to: float) -> None:
         """The state's initial guess at ``angle_to`` (:class:`CoilingPredictor`)."""
         self.predictions.predict(self.model.q.x.array, angle_from, angle_to)
 
     def update(self, angle: float) -> None:
-        """After a converged step: winding angles from the new state; the predictor remembers it."""
+        """After a converged step: winding angles and the turns' sides from the new state; the
+        predictor remembers it."""
         self.contact.update(angle)
+        self.tape.accept_state()
         self.predictions.remember(angle, self.model.q.x.array)
 
     def end_slide(self) -> float:
@@ -133,7 +138,7 @@ class CoilingModel:
         return global_scalar(self.end_slide_form, self.model.mesh.comm)
 
     def internal_force(self) -> np.ndarray:
-        """The internal force vector dE/dq (strain + contact energy), local array (collective)."""
+        """The internal force vector dE/dq (strain + hub and turns' contact), local array (collective)."""
         if self._reaction_form is None:
             self._reaction_form = dolfinx.fem.form(ufl.derivative(self.energy, self.model.q, self.model.dq))
             self._reaction_vector = dolfinx.fem.Function(self.model.W)
@@ -143,6 +148,7 @@ class CoilingModel:
         b.array[:] = 0.0
         dolfinx.fem.assemble_vector(b.array, self._reaction_form)
         b.scatter_reverse(dolfinx.la.InsertMode.add)
+        self.tape.add_self_contact_force(self._reaction_vector)
         return b.array
 
     def edge_forces(self) -> dict[str, float]:

@@ -23,6 +23,7 @@ from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation, 
 from tapecoil.measures.coiling import coil_measures, coiled_cells, ploy_measure
 from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
 from tapecoil.phases.runner import LOG, Phase, run_phase
+from tapecoil.phases.tape_on_hub import check_penetration
 
 
 @dataclass
@@ -174,7 +175,8 @@ class CoilingRun:
         def converged(step):
             m.update(step.load)
             self.next_step = step.next_step
-            self._row("coil", step.load, step)
+            row = self._row("coil", step.load, step)
+            check_penetration(row["max_penetration"], m.config, step.load, f"hub angle {step.load:.6g} rad")
             if self.stop is not None:
                 self.stop.check(m.comm)
 

@@ -77,6 +77,7 @@ class DeploymentModel:
         self.contact = c.contact
         self.hub_angle = c.root.angle
         c.root.set(1.0, self.hub_angle)
+        c.contact.turn(self.hub_angle)
         self.bcs = c.root.bcs
         tp = cfg.tape
         self.rho_inf = cfg.deployment.rho_inf if rho_inf is None else rho_inf
@@ -112,6 +113,12 @@ class DeploymentModel:
         self.kinetic_form = dolfinx.fem.form(kinetic * model.jacobian * model.dx)
         self._internal_form = ufl.derivative(self.energy, model.q, model.dq)
         self.solver.point_forces.append(self.hold.point_force())
+        # the turns' contact force at the level of the other internal forces: generalized-alpha's
+        # average, and for rho_inf = 1 the trapezoidal mean of the two states (not a discrete
+        # gradient: the penalty of the turns is the one force of the conserving scheme that is
+        # only conserving to the order of the step)
+        alpha_f = ti.parameters.alpha_f if self.scheme == "alpha" else 0.5
+        self.solver.terms += c.contact_terms(model.q, self.bcs, 1.0 - alpha_f, (alpha_f, ti.q_old))
         self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
 
     def _alpha_forms(self, hold):
@@ -235,8 +242,12 @@ class DeploymentModel:
         )
         M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(mass), bcs=self.bcs)
         M.assemble()
-        b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(-self._internal_form))
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        internal = dolfinx.fem.Function(model.W)
+        dolfinx.fem.petsc.assemble_vector(internal.x.petsc_vec, dolfinx.fem.form(self._internal_form))
+        internal.x.petsc_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self.tape.add_self_contact_force(internal)
+        b = internal.x.petsc_vec.copy()
+        b.scale(-1.0)
         b.array[self.hold.end_dofs] += self.hold.dead_full
         fixed = np.concatenate([bc.dof_indices()[0] for bc in self.bcs])
         owned = b.getLocalSize()
@@ -277,6 +288,7 @@ class DeploymentModel:
     def update(self) -> None:
         """After a converged step: winding angles from the new state (the hub stays put)."""
         self.contact.update(self.hub_angle)
+        self.tape.accept_state()
 
 
 def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: dict) -> None:

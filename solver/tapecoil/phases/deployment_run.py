@@ -24,7 +24,7 @@ from tapecoil.phases.deployment import (
     write_deployment_checkpoint,
 )
 from tapecoil.phases.runner import LOG, Phase, run_phase
-from tapecoil.phases.tape_on_hub import TapeOnHub
+from tapecoil.phases.tape_on_hub import TapeOnHub, check_penetration
 
 
 @dataclass
@@ -166,6 +166,7 @@ class DeploymentRun:
             self.next_step = step.next_step if step.load < end else None
             m.update()
             row = self._row(step.load, step)
+            check_penetration(row["max_penetration"], m.config, step.load, f"t = {step.load:.6g} s")
             if row["lambda"] >= d.lambda_end:
                 raise _Deployed
             if self.stop is not None:

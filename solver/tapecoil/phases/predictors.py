@@ -104,7 +104,7 @@ class CoilingPredictor:
         c = self.tape.contact
         nodes = c.nodes
         if self.kind == "shift":
-            turn_radius = float(c.obstacle_radius(np.array([angle_from]))[0]) + 0.5 * c.h
+            turn_radius = float(c.spiral_radius(np.array([angle_from]))[0]) + 0.5 * c.h
             ds = turn_radius * dtheta
             shifted = self._along_tape.values_at(current, -ds)
             q[nodes.u_dofs] = shifted[:, :3] - np.array([ds, 0.0, 0.0])

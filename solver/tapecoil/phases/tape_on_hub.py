@@ -17,9 +17,11 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.contact.self_contact import SelfContact, SelfContactTerm
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
+from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_strip_mesh
 from tapecoil.geometry.sections import CircularArcSection
 from tapecoil.geometry.surfaces import StripGeometry
@@ -27,6 +29,19 @@ from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact, default_penalty
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, ShellMaterial
+
+
+def check_penetration(penetration: float, config, load: float, where: str) -> None:
+    """Stop (ContinuationError at ``load``) if the tape has gone deeper into the hub or itself
+    than ``contact.stop_penetration`` h: the penalty no longer keeps the faces apart."""
+    h, limit = config.tape.h, config.contact.stop_penetration
+    if penetration > limit * h:
+        raise ContinuationError(
+            f"at {where} the tape penetrates the hub or its own turns by {penetration / h:.3g} h, more "
+            f"than contact.stop_penetration = {limit:g} h: the contact no longer keeps the faces apart "
+            "(a stiffer contact.penalty_scale or a finer mesh); the state saved is this step's",
+            load,
+        )
 
 
 class TapeOnHub:
@@ -62,20 +77,35 @@ class TapeOnHub:
         # the climb over the root end spread over about two elements (at least 0.3 rad)
         ramp = max(2 * self.element_length / r_hub, 0.3)
         smoothing = cc.smoothing * tp.h
-        self.contact = CoilContact(model, self.frame, self.penalty, max_turns, ramp, smoothing)
+        self.contact = CoilContact(model, self.frame, self.penalty, max_turns, ramp, smoothing, cc.turns)
         self.contact.reset()
-        # strain + contact energy: the stored energy whose gradient is the internal force
-        self.energy = model.strain_energy + self.contact.energy
-        self.forms = {
-            name: dolfinx.fem.form(form)
-            for name, form in (
-                ("membrane", model.energy_membrane),
-                ("bending", model.energy_bending),
-                ("shear", model.energy_shear),
-                ("contact_hub", self.contact.energy_hub),
-                ("contact_coil", self.contact.energy_coil),
+        self.self_contact = self.search = None
+        if cc.turns == "surface":
+            # the turns against each other: any part of the mid-surface against any other more
+            # than a few search reaches away along the tape (its own neighbourhood)
+            buffer = cc.search_margin * tp.h
+            self.self_contact = SelfContact(
+                model,
+                self.contact.nodes,
+                tp.h,
+                self.penalty,
+                smoothing,
+                buffer,
+                exclusion=4 * (tp.h + buffer),
             )
-        }
+            self.search = self.self_contact.new_search()
+        # strain + contact energy as forms (the turns' real contact is assembled on its own:
+        # add_self_contact_force)
+        self.energy = model.strain_energy + self.contact.energy
+        parts = [
+            ("membrane", model.energy_membrane),
+            ("bending", model.energy_bending),
+            ("shear", model.energy_shear),
+            ("contact_hub", self.contact.energy_hub),
+        ]
+        if self.contact.energy_coil is not None:
+            parts.append(("contact_coil", self.contact.energy_coil))
+        self.forms = {name: dolfinx.fem.form(form) for name, form in parts}
 
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
@@ -84,6 +114,8 @@ class TapeOnHub:
 
     def energies(self) -> dict[str, float]:
         out = {name: global_scalar(form, self.model.mesh.comm) for name, form in self.forms.items()}
+        if self.self_contact is not None:
+            out["contact_coil"] = self.self_contact.energy(self.model.q.x.array, self.search)
         out["strain"] = out["membrane"] + out["bending"] + out["shear"]
         out["contact"] = out["contact_hub"] + out["contact_coil"]
         return out
@@ -129,9 +161,29 @@ class TapeOnHub:
         return {"coiled_length": s, "outer_radius": r + 0.5 * h}
 
     def max_penetration(self) -> float:
-        """Largest penetration of the inner face into the hub or the turn beneath [m] (>= 0)."""
+        """Largest penetration into the hub or of the tape into itself [m] (>= 0, collective)."""
         local = self.contact.nodal_penetration()
-        return max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
+        hub = max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
+        if self.self_contact is None:
+            return hub
+        return max(hub, self.self_contact.max_penetration(self.model.q.x.array, self.search))
+
+    def add_self_contact_force(self, force: dolfinx.fem.Function) -> None:
+        """Add the force of the turns' real contact dE/dq at the current state to ``force``
+        (collective; nothing with the spiral obstacle, whose force is in ``energy``)."""
+        if self.self_contact is not None:
+            self.self_contact.add_force(force, self.model.q.x.array, self.search)
+
+    def accept_state(self) -> None:
+        """After a converged step: the turns' real contact reads its sides from this state."""
+        if self.self_contact is not None:
+            self.self_contact.accept(self.model.q.x.array)
+
+    def contact_terms(self, q, bcs, weight: float = 1.0, previous=None) -> list:
+        """The solver terms of the turns' real contact (:class:`SelfContactTerm`), if any."""
+        if self.self_contact is None:
+            return []
+        return [SelfContactTerm(self.self_contact, q, bcs, weight, previous)]
 
     # -- checkpoint -------------------------------------------------------------------------
     def checkpoint_functions(self) -> dict:
@@ -166,6 +218,8 @@ class TapeOnHub:
         parts = checkpoint.empty_state_parts(tape.model.W, "")
         checkpoint.read_functions(path, {**parts, "winding_angle": tape.contact.psi})
         checkpoint.set_state(tape.model.q, parts, "")
+        tape.accept_state()
         tape.contact.hub_angle = meta["hub_angle"]
         tape.root.set(1.0, meta["hub_angle"])
+        tape.contact.turn(meta["hub_angle"])
         return tape, meta

@@ -1,0 +1,320 @@
+"""Penalty contact of a shell's mid-surface with itself, from the current geometry of both sides.
+
+Two parts of a shell of thickness h touch when their mid-surfaces come within h of each other
+(the faces h/2 off the mid-surfaces meet). Every node A of the mid-surface is a contact point;
+its partners are the closest points y of the other parts of the surface (the cells beyond
+``exclusion`` from A in the reference configuration, so that A's own neighbourhood never
+counts), found on the deformed surface: at most one on each side of A (the side is the sign of
+(x_A - y) . n_y, n the surface's own orientation), so that a turn of a coil is kept off the
+turn beneath and off the turn above, and any part of the surface off any other. The gap is
+
+    g = |x_A - y| - h,
+
+and the penalty energy w_A k/2 <-g>^2 (w_A the node's share of the reference area, k the
+stiffness per unit area, <.> the bracket smoothed over a width delta as in the hub contact:
+delta softplus(-g / delta)). Its force acts on A and, through the shape functions N_b(y), on the
+nodes of the partner cell: equal and opposite, since sum_b N_b = 1. Both faces' nodes are
+contact points (two-pass), so the pressure between two layers is the sum of both passes.
+
+Newton's matrix is the main part of the exact one, w_A k (<-g>'^2 + <-g> <-g>'') B B^T with
+B = e (x) (1, -N_1, ..., -N_9), e = (x_A - y)/|x_A - y|: at the closest point the variation of y
+along the surface and of e drop out of dg, and the remaining terms are the penetration times the
+surface's curvature, small against the main part when the penetration is a fraction of h and the
+radius of curvature many h.
+
+Parallel: the mid-surface is small (nodes and cells of a 2D mesh), so every rank gathers all
+node positions at each evaluation (one Allgatherv of 3 doubles per node) and searches for its
+own nodes' partners; the forces and the matrix entries go to whichever ranks own the dofs
+(PETSc's stash). The search is a Verlet list (:class:`~tapecoil.contact.projection.CandidateSearch`):
+rebuilt only when a node has moved by more than half the buffer, and exact in between.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from tapecoil.contact.projection import CandidateSearch, closest_points
+
+
+def smoothed_bracket(gap: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The penetration p = <-gap> (smoothed over ``delta`` if > 0) and dp/dgap, d2p/dgap2."""
+    if delta > 0.0:
+        x = -gap / delta
+        p = delta * (np.maximum(x, 0.0) + np.log1p(np.exp(-np.abs(x))))
+        s = 0.5 * (1.0 + np.tanh(0.5 * x))  # the logistic function, stable for either sign
+        return p, -s, s * (1.0 - s) / delta
+    active = gap < 0.0
+    return np.where(active, -gap, 0.0), -active.astype(float), np.zeros_like(gap)
+
+
+@dataclass
+class ContactPairs:
+    """The contact pairs of one rank at one state: contact node, partner cell and the penalty.
+
+    ``dofs`` (P, 30): global u-dofs of the node and of the partner cell's nodes; ``B`` (P, 30):
+    dg/dq on them; ``force`` (P,): dE/dg; ``stiffness`` (P,): d2E/dg2; ``energy``: this rank's
+    penalty energy [J].
+    """
+
+    node: np.ndarray
+    cell: np.ndarray
+    gap: np.ndarray
+    direction: np.ndarray
+    dofs: np.ndarray
+    B: np.ndarray
+    force: np.ndarray
+    stiffness: np.ndarray
+    energy: float
+
+
+class SelfContact:
+    """Self-contact of a :class:`~tapecoil.models.shell.NaghdiShell` (see the module docstring).
+
+    ``nodes``: the shell's :class:`~tapecoil.models.shell.Nodes`; ``thickness`` h [m];
+    ``penalty`` k [N/m^3]; ``smoothing`` delta [m]; ``buffer`` the search's Verlet buffer [m];
+    ``exclusion`` [m]: parts of the surface closer than this to a node in the reference
+    configuration are its own neighbourhood.
+    """
+
+    def __init__(self, model, nodes, thickness, penalty, smoothing, buffer, exclusion):
+        self.model, self.nodes = model, nodes
+        self.comm = comm = model.mesh.comm
+        self.h, self.penalty, self.delta = thickness, penalty, smoothing
+        # pairs beyond this gap carry no force (the smoothed bracket is below 1e-5 delta there)
+        self.cutoff = 12.0 * smoothing
+        imap = nodes.space.dofmap.index_map
+        self.n_owned = n_owned = imap.size_local
+        local_nodes = np.arange(n_owned + imap.num_ghosts, dtype=np.int32)
+        global_node = imap.local_to_global(local_nodes).astype(np.int64)
+        self.n_nodes = imap.size_global
+        W_map, bs = model.W.dofmap.index_map, model.W.dofmap.index_map_bs
+        u_local = nodes.u_dofs[:n_owned].ravel()
+        u_global = (W_map.local_to_global((u_local // bs).astype(np.int32)) * bs + u_local % bs).reshape(
+            -1, 3
+        )
+
+        test = ufl.TestFunction(nodes.space)
+        area = dolfinx.fem.assemble_vector(dolfinx.fem.form(test * model.jacobian * model.dx))
+        area.scatter_reverse(dolfinx.la.InsertMode.add)
+
+        owned = global_node[:n_owned]
+        self._counts = np.array(comm.allgather(n_owned), dtype=np.int64)
+        self._order = np.concatenate(comm.allgather(owned))
+        self.owned = owned
+
+        def gather(values):
+            out = np.empty((self.n_nodes, *values.shape[1:]), dtype=values.dtype)
+            out[self._order] = np.concatenate(comm.allgather(values))
+            return out
+
+        self.reference = gather(nodes.reference[:, :n_owned].T.copy())
+        self.material = gather(nodes.xi[:, :n_owned].T.copy())
+        self.u_dofs = gather(u_global.astype(PETSc.IntType))
+        self.weights = gather(area.array[:n_owned].copy())
+        n_cells = model.mesh.topology.index_map(model.mesh.topology.dim).size_local
+        self.cells = np.vstack(comm.allgather(global_node[nodes.space.dofmap.list[:n_cells]]))
+        self.buffer, self.exclusion = buffer, exclusion
+        self.reach = thickness + self.cutoff
+        self.timings = {"gather": 0.0, "search": 0.0, "projection": 0.0, "assembly": 0.0}
+        self._reference_version = 0
+        self.accept(model.q.x.array)
+
+    def new_search(self) -> CandidateSearch:
+        return CandidateSearch(self.cells, self.material, self.exclusion, self.reach, self.buffer)
+
+    def positions(self, q: np.ndarray) -> np.ndarray:
+        """Mid-surface positions (N, 3) of every node of the surface, on every rank (collective)."""
+        t0 = time.perf_counter()
+        u = q[self.nodes.u_dofs[: self.n_owned]]
+        out = np.empty((self.n_nodes, 3))
+        received = np.empty(3 * self.n_nodes)
+        self.comm.Allgatherv(np.ascontiguousarray(u.ravel()), [received, 3 * self._counts])
+        out[self._order] = received.reshape(-1, 3)
+        out += self.reference
+        self.timings["gather"] += time.perf_counter() - t0
+        return out
+
+    def accept(self, q: np.ndarray) -> None:
+        """Take the state ``q`` as the converged one the sides are read from (collective)."""
+        self.reference_positions = self.positions(q)
+        self._reference_version += 1
+
+    def _sides(self, node: np.ndarray, cell: np.ndarray, search: CandidateSearch) -> dict:
+        """Side of each candidate partner at the converged state, and the projections' warm start."""
+        stamp = (search.searches, self._reference_version)
+        if search.data.get("stamp") != stamp:
+            xr = self.reference_positions
+            found = closest_points(xr[node], xr[self.cells[cell]])
+            above = np.einsum("pi,pi->p", found["direction"], found["normal"]) >= 0.0
+            search.data = {"stamp": stamp, "side": np.where(above, 1.0, -1.0), "start": found["ref"]}
+        return search.data
+
+    def pairs(self, q: np.ndarray, search: CandidateSearch, dofs: np.ndarray | None = None) -> ContactPairs:
+        """This rank's contact pairs at the W-dof array ``q`` (collective: gathers positions).
+
+        ``dofs`` (N, 3): the u-dofs to assemble into (constrained ones -1); default all.
+        """
+        x = self.positions(q)
+        t0 = time.perf_counter()
+        node, cell = search.candidates(x, self.owned)
+        t1 = time.perf_counter()
+        data = self._sides(node, cell, search)
+        found = closest_points(x[node], x[self.cells[cell]], iterations=4, start=data["start"])
+        data["start"] = found["ref"]
+        side = data["side"]
+        # the distance from the partner, counted on the side the node was on at the converged
+        # state: a node pushed through the partner has a gap below -h, not above it. Beyond the
+        # partner's free edge the closest point is on the edge, and the distance to it rounds
+        # the edge off (a face of thickness h ends in a half-cylinder of radius h/2 each way)
+        crossed = side * np.einsum("pi,pi->p", found["direction"], found["normal"]) < 0.0
+        sign = np.where(crossed, -1.0, 1.0)
+        gap = sign * found["distance"] - self.h
+        near = gap < self.cutoff
+        node, cell, gap, side = node[near], cell[near], gap[near], side[near]
+        direction, N = (sign[:, None] * found["direction"])[near], found["N"][near]
+        # the closest partner on each side of each node
+        order = np.lexsort((gap, side, node))
+        key = node[order] * 2 + (side[order] > 0)
+        first = order[np.concatenate([[True], key[1:] != key[:-1]])] if len(order) else order
+        node, cell, gap, N, e = node[first], cell[first], gap[first], N[first], direction[first]
+        t2 = time.perf_counter()
+        self.timings["search"] += t1 - t0
+        self.timings["projection"] += t2 - t1
+
+        u_dofs = self.u_dofs if dofs is None else dofs
+        coefficients = np.concatenate([np.ones((len(node), 1)), -N], axis=1)
+        B = (coefficients[:, :, None] * e[:, None, :]).reshape(len(node), 30)
+        pair_dofs = np.concatenate([u_dofs[node], u_dofs[self.cells[cell]].reshape(-1, 27)], axis=1)
+        p, dp, d2p = smoothed_bracket(gap, self.delta)
+        kw = self.penalty * self.weights[node]
+        return ContactPairs(
+            node=node,
+            cell=cell,
+            gap=gap,
+            direction=e,
+            dofs=pair_dofs,
+            B=B,
+            force=kw * p * dp,
+            stiffness=kw * (dp**2 + p * d2p),
+            energy=float(np.sum(0.5 * kw * p**2)),
+        )
+
+    def energy(self, q: np.ndarray, search: CandidateSearch) -> float:
+        """The penalty energy of the whole surface [J] (collective)."""
+        return self.comm.allreduce(self.pairs(q, search).energy, op=MPI.SUM)
+
+    def add_force(self, force, q: np.ndarray, search: CandidateSearch) -> None:
+        """Add the contact force dE/dq at ``q`` to the dolfinx Function ``force`` (collective)."""
+        pairs = self.pairs(q, search)
+        vec = force.x.petsc_vec
+        vec.setValues(pairs.dofs.ravel(), (pairs.force[:, None] * pairs.B).ravel(), addv=PETSc.InsertMode.ADD)
+        vec.assemblyBegin()
+        vec.assemblyEnd()
+        vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+    def max_penetration(self, q: np.ndarray, search: CandidateSearch) -> float:
+        """The deepest penetration -g of any part of the surface into another [m], >= 0 (collective)."""
+        gap = self.pairs(q, search).gap
+        local = float(-gap.min()) if gap.size else 0.0
+        return max(self.comm.allreduce(local, op=MPI.MAX), 0.0)
+
+
+class SelfContactTerm:
+    """The self-contact's force and matrix in a :class:`~tapecoil.core.newton.SNESSolver`.
+
+    ``q``: the solver's state; ``bcs``: its Dirichlet conditions (their dofs take no contact
+    entries: the solver sets those rows). The force enters as ``weight`` f(q) and, with
+    ``previous = (weight_old, q_old)``, plus weight_old f(q_old): the force average of
+    generalized-alpha.
+    """
+
+    def __init__(self, contact: SelfContact, q, bcs, weight: float = 1.0, previous=None):
+        self.contact, self.q = contact, q
+        comm = contact.comm
+        W_map, bs = q.function_space.dofmap.index_map, q.function_space.dofmap.index_map_bs
+        constrained = [bc.dof_indices()[0] for bc in bcs]
+        local = np.concatenate(constrained) if constrained else np.zeros(0, np.int32)
+        owned = local[local < W_map.size_local * bs]
+        glob = W_map.local_to_global((owned // bs).astype(np.int32)) * bs + owned % bs
+        fixed = np.unique(np.concatenate(comm.allgather(glob)))
+        self.dofs = np.where(np.isin(contact.u_dofs, fixed), -1, contact.u_dofs).astype(PETSc.IntType)
+        self.weight, self.previous = weight, previous
+        self.search, self.search_previous = contact.new_search(), contact.new_search()
+        self._cache: dict[str, tuple[np.ndarray, ContactPairs]] = {}
+        self._pattern: set[int] = set()
+        self.pattern_extensions = 0
+
+    def _pairs(self, name: str, q: np.ndarray, search: CandidateSearch) -> ContactPairs:
+        cached = self._cache.get(name)
+        if cached is not None and np.array_equal(cached[0], q):
+            return cached[1]
+        pairs = self.contact.pairs(q, search, self.dofs)
+        self._cache[name] = (q.copy(), pairs)
+        return pairs
+
+    def current(self) -> ContactPairs:
+        return self._pairs("current", self.q.x.array, self.search)
+
+    def add_residual(self, b: PETSc.Vec) -> None:
+        """Add the contact force to the residual vector ``b`` (collective)."""
+        parts = [(self.weight, self.current())]
+        if self.previous is not None:
+            weight_old, q_old = self.previous
+            parts.append((weight_old, self._pairs("previous", q_old.x.array, self.search_previous)))
+        t0 = time.perf_counter()
+        for weight, pairs in parts:
+            values = ((weight * pairs.force)[:, None] * pairs.B).ravel()
+            dofs = pairs.dofs.ravel()
+            free = dofs >= 0  # a vector, unlike a matrix, takes no negative index
+            b.setValues(dofs[free], values[free], addv=PETSc.InsertMode.ADD)
+        b.assemblyBegin()
+        b.assemblyEnd()
+        self.contact.timings["assembly"] += time.perf_counter() - t0
+
+    def add_jacobian(self, A: PETSc.Mat) -> bool:
+        """Add the contact matrix to ``A`` (collective); True if A's pattern had to be widened."""
+        pairs = self.current()
+        t0 = time.perf_counter()
+        keys = pairs.node * len(self.contact.cells) + pairs.cell
+        new = np.array([k not in self._pattern for k in keys.tolist()], dtype=bool)
+        A.assemble()
+        widen = self.contact.comm.allreduce(int(new.sum()), op=MPI.SUM) > 0
+        if widen:
+            self._widen(A, pairs.dofs[new])
+            self._pattern.update(keys[new].tolist())
+        blocks = (self.weight * pairs.stiffness)[:, None, None] * pairs.B[:, :, None] * pairs.B[:, None, :]
+        add = PETSc.InsertMode.ADD
+        for dofs, block in zip(pairs.dofs, blocks, strict=True):
+            A.setValues(dofs, dofs, block, addv=add)
+        self.contact.timings["assembly"] += time.perf_counter() - t0
+        return widen
+
+    def _widen(self, A: PETSc.Mat, dofs: np.ndarray) -> None:
+        """Add the couplings of the pairs ``dofs`` (P, 30) to A's nonzero pattern (collective).
+
+        The couplings go into a matrix C of zeros (PETSc's stash takes the rows other ranks own;
+        C is small, so its own growth costs little), and A + C with a different pattern builds
+        the union pattern with its exact preallocation in one pass, instead of a reallocation of
+        A for each row that gains an entry.
+        """
+        C = PETSc.Mat().create(A.getComm())
+        C.setSizes(A.getSizes())
+        C.setType(PETSc.Mat.Type.AIJ)
+        C.setPreallocationNNZ((30, 30))
+        C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        zeros = np.zeros((dofs.shape[1], dofs.shape[1]))
+        for pair in dofs:
+            C.setValues(pair, pair, zeros, addv=PETSc.InsertMode.ADD)
+        C.assemble()
+        lgmaps = A.getLGMap()
+        A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        A.setLGMap(*lgmaps)
+        C.destroy()
+        self.pattern_extensions += 1
