@@ -83,7 +83,7 @@ def run(
         for phase, phase_summary in out.items():
             separation = separation_measure(directory, phase, comm)
             if separation is not None:
-                phase_summary["measures"]["turn_separation"] = separation
+                phase_summary["measures"]["closest_turns"] = separation
         summary = results.run_summary(out, started, comm)
         results.write_summary(directory, summary, comm)
         if (config.output.report if report is None else report) and not summary["interrupted"]:

@@ -4,23 +4,28 @@ Two parts of a shell of thickness h touch when their mid-surfaces come within h 
 (the faces h/2 off the mid-surfaces meet). Every node A of the mid-surface is a contact point;
 its partners are the closest points y of the other parts of the surface (the cells beyond
 ``exclusion`` from A in the reference configuration, so that A's own neighbourhood never
-counts), found on the deformed surface: at most one on each side of A (the side is the sign of
-(x_A - y) . n_y, n the surface's own orientation), so that a turn of a coil is kept off the
-turn beneath and off the turn above, and any part of the surface off any other. The gap is
+counts), found on the deformed surface: at most one on each side of A (the side of the
+partner A was on at the last converged state), so that a turn of a coil is kept off the turn
+beneath and off the turn above, and any part of the surface off any other. The gap is
 
-    g = |x_A - y| - h,
+    g = side (x_A - y) . n_s(y) - h,
 
-and the penalty energy w_A k/2 <-g>^2 (w_A the node's share of the reference area, k the
-stiffness per unit area, <.> the bracket smoothed over a width delta as in the hub contact:
-delta softplus(-g / delta)). Its force acts on A and, through the shape functions N_b(y), on the
-nodes of the partner cell: equal and opposite, since sum_b N_b = 1. Both faces' nodes are
-contact points (two-pass), so the pressure between two layers is the sum of both passes.
+n_s the partner's smoothed normal (its shape functions times the nodes' mean normals: the Q2
+surface is only C0, and a node over an edge between two cells must be pushed the same way by
+either), counted on the node's side so that a node pushed through its partner has g < -h and is
+pushed back. Beyond a free edge of the partner its face counts as extended by h (turns of one
+width lie edge over edge). The penalty energy is w_A k/2 <-g>^2 (w_A the node's share of the
+reference area, k the stiffness per unit area, <.> the bracket smoothed over a width delta as
+in the hub contact: delta softplus(-g / delta)). Its force acts on A and, through the shape
+functions N_b(y), on the nodes of the partner cell: equal and opposite, since sum_b N_b = 1.
+Both faces' nodes are contact points (two-pass), so the pressure between two layers is the sum
+of both passes.
 
 Newton's matrix is the main part of the exact one, w_A k (<-g>'^2 + <-g> <-g>'') B B^T with
-B = e (x) (1, -N_1, ..., -N_9), e = (x_A - y)/|x_A - y|: at the closest point the variation of y
-along the surface and of e drop out of dg, and the remaining terms are the penetration times the
-surface's curvature, small against the main part when the penetration is a fraction of h and the
-radius of curvature many h.
+B = e (x) (1, -N_1, ..., -N_9), e = side n_s: at the closest point the variation of y along the
+surface drops out of dg, and the remaining terms (the turning of n_s, times the force) are the
+penetration over the element length, small against the main part when the penetration is a
+fraction of h.
 
 Parallel: the mid-surface is small (nodes and cells of a 2D mesh), so every rank gathers all
 node positions at each evaluation (one Allgatherv of 3 doubles per node) and searches for its
@@ -40,7 +45,7 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from tapecoil.contact.projection import CandidateSearch, closest_points
+from tapecoil.contact.projection import Q2_TENSOR, CandidateSearch, closest_points, q2_basis
 
 
 def smoothed_bracket(gap: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -72,6 +77,32 @@ class ContactPairs:
     force: np.ndarray
     stiffness: np.ndarray
     energy: float
+
+
+# the nodes of each edge of basix's Q2 quadrilateral: r_1 = 0, r_1 = 1, r_2 = 0, r_2 = 1
+Q2_EDGES = ((0, 2, 5), (1, 3, 6), (0, 1, 4), (2, 3, 7))
+
+
+def free_edges(cells: np.ndarray) -> np.ndarray:
+    """(Nc, 4) flags: which edges of each Q2 cell (in :data:`Q2_EDGES` order) bound the surface."""
+    keys = np.stack([np.sort(cells[:, list(e)], axis=1) for e in Q2_EDGES], axis=1)  # (Nc, 4, 3)
+    flat = keys.reshape(-1, 3)
+    _, inverse, counts = np.unique(flat, axis=0, return_inverse=True, return_counts=True)
+    return (counts[inverse.ravel()] == 1).reshape(-1, 4)
+
+
+def on_free_edge(ref: np.ndarray, free: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
+    """Whether reference points (n, 2) lie on a free edge of their cells (``free`` (n, 4))."""
+    at = np.stack(
+        [
+            ref[:, 0] <= tolerance,
+            ref[:, 0] >= 1 - tolerance,
+            ref[:, 1] <= tolerance,
+            ref[:, 1] >= 1 - tolerance,
+        ],
+        axis=1,
+    )
+    return np.any(at & free, axis=1)
 
 
 class SelfContact:
@@ -122,9 +153,21 @@ class SelfContact:
         self.cells = np.vstack(comm.allgather(global_node[nodes.space.dofmap.list[:n_cells]]))
         self.buffer, self.exclusion = buffer, exclusion
         self.reach = thickness + self.cutoff
+        self.free_edges = free_edges(self.cells)
+        # Q2 gradients at the cell's own nodes (reference coordinates): the nodal normals
+        self._node_gradients = q2_basis(Q2_TENSOR / 2.0)[1]
         self.timings = {"gather": 0.0, "search": 0.0, "projection": 0.0, "assembly": 0.0}
         self._reference_version = 0
         self.accept(model.q.x.array)
+
+    def nodal_normals(self, x: np.ndarray) -> np.ndarray:
+        """Unit normals (N, 3) at the nodes: the mean of the normals of the cells around each."""
+        t = np.einsum("nak,cai->cnki", self._node_gradients, x[self.cells])  # (Nc, 9, 2, 3)
+        cell_normals = np.cross(t[:, :, 0], t[:, :, 1])
+        cell_normals /= np.linalg.norm(cell_normals, axis=2)[:, :, None]
+        total = np.zeros_like(x)
+        np.add.at(total, self.cells.ravel(), cell_normals.reshape(-1, 3))
+        return total / np.maximum(np.linalg.norm(total, axis=1), 1e-300)[:, None]
 
     def new_search(self) -> CandidateSearch:
         return CandidateSearch(self.cells, self.material, self.exclusion, self.reach, self.buffer)
@@ -166,21 +209,34 @@ class SelfContact:
         node, cell = search.candidates(x, self.owned)
         t1 = time.perf_counter()
         data = self._sides(node, cell, search)
-        found = closest_points(x[node], x[self.cells[cell]], iterations=4, start=data["start"])
-        data["start"] = found["ref"]
+        # from the search's projections, so that the residual is a function of the state alone
+        found = closest_points(x[node], x[self.cells[cell]], iterations=6, start=data["start"])
         side = data["side"]
-        # the distance from the partner, counted on the side the node was on at the converged
-        # state: a node pushed through the partner has a gap below -h, not above it. Beyond the
-        # partner's free edge the closest point is on the edge, and the distance to it rounds
-        # the edge off (a face of thickness h ends in a half-cylinder of radius h/2 each way)
-        crossed = side * np.einsum("pi,pi->p", found["direction"], found["normal"]) < 0.0
-        sign = np.where(crossed, -1.0, 1.0)
-        gap = sign * found["distance"] - self.h
+        # the gap is counted along the partner's smoothed normal (the Q2 surface is only C0:
+        # across an edge between two cells the cells' own normals jump, and a node over that
+        # edge would be pushed one way or the other by whichever cell is the closer by
+        # round-off), on the side the node was on at the converged state, so that a node that
+        # has gone through the partner has a gap below -h and is pushed back. Beyond the
+        # partner's free edge the partner's face is taken as extended by h (turns of the same
+        # width lie edge over edge, and their edges must not pass each other); farther beside
+        # it the node is not over the partner
+        r = x[node] - found["y"]
+        smooth = np.matmul(found["N"][:, None, :], self.nodal_normals(x)[self.cells[cell]])[:, 0]
+        smooth /= np.linalg.norm(smooth, axis=1)[:, None]
+        normal_distance = np.einsum("pi,pi->p", r, smooth)
+        beside = np.linalg.norm(r - normal_distance[:, None] * smooth, axis=1)
+        over = ~on_free_edge(found["ref"], self.free_edges[cell]) | (beside <= self.h)
+        gap = side * normal_distance - self.h
+        direction = side[:, None] * smooth
+        distance = found["distance"]
+        keep = over
+        node, cell, gap, side, distance = node[keep], cell[keep], gap[keep], side[keep], distance[keep]
+        direction, found = direction[keep], {"N": found["N"][keep]}
         near = gap < self.cutoff
-        node, cell, gap, side = node[near], cell[near], gap[near], side[near]
-        direction, N = (sign[:, None] * found["direction"])[near], found["N"][near]
-        # the closest partner on each side of each node
-        order = np.lexsort((gap, side, node))
+        # the closest part of the surface on each side of each node
+        node, cell, gap, side, distance = node[near], cell[near], gap[near], side[near], distance[near]
+        direction, N = direction[near], found["N"][near]
+        order = np.lexsort((distance, side, node))
         key = node[order] * 2 + (side[order] > 0)
         first = order[np.concatenate([[True], key[1:] != key[:-1]])] if len(order) else order
         node, cell, gap, N, e = node[first], cell[first], gap[first], N[first], direction[first]

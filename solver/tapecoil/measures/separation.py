@@ -487,8 +487,8 @@ def separation_measure(directory: str | Path, phase: str, comm=None) -> dict | N
                     "at_unit": "rad" if phase == "coiling" else "s",
                     "snapshots": len(history.files),
                     "lowest_1_percent": float(np.nanmin(first)) if found and first is not None else None,
-                    "quantity": "radial distance between the mid-surfaces of turns lying over each other "
-                    "(none: no two turns lie over each other)",
+                    "quantity": "radial distance between the mid-surfaces of turns lying over each other"
+                    + ("" if found else " (no two turns lie over each other)"),
                 },
             ).to_dict()
     return entry if comm is None else comm.bcast(entry, root=0)
