@@ -19,7 +19,9 @@ reference area, k the stiffness per unit area, <.> the bracket smoothed over a w
 in the hub contact: delta softplus(-g / delta)). Its force acts on A and, through the shape
 functions N_b(y), on the nodes of the partner cell: equal and opposite, since sum_b N_b = 1.
 Both faces' nodes are contact points (two-pass), so the pressure between two layers is the sum
-of both passes.
+of both passes. A node keeps its partner cell on a side while its closest point stays inside
+it: of two nearly equally close cells (a node over the edge between them) the closer by
+round-off would change from one Newton iteration to the next, and Newton would cycle.
 
 Newton's matrix is the main part of the exact one, w_A k (<-g>'^2 + <-g> <-g>'') B B^T with
 B = e (x) (1, -N_1, ..., -N_9), e = side n_s: at the closest point the variation of y along the
@@ -111,10 +113,12 @@ class SelfContact:
     ``nodes``: the shell's :class:`~tapecoil.models.shell.Nodes`; ``thickness`` h [m];
     ``penalty`` k [N/m^3]; ``smoothing`` delta [m]; ``buffer`` the search's Verlet buffer [m];
     ``exclusion`` [m]: parts of the surface closer than this to a node in the reference
-    configuration are its own neighbourhood.
+    configuration are its own neighbourhood. ``side_hint(node, cell)``: optional, +1 or -1 per
+    candidate pair, the side of the cell (along the surface's orientation) the node belongs on
+    where the converged state cannot tell (see :meth:`_sides`).
     """
 
-    def __init__(self, model, nodes, thickness, penalty, smoothing, buffer, exclusion):
+    def __init__(self, model, nodes, thickness, penalty, smoothing, buffer, exclusion, side_hint=None):
         self.model, self.nodes = model, nodes
         self.comm = comm = model.mesh.comm
         self.h, self.penalty, self.delta = thickness, penalty, smoothing
@@ -151,7 +155,7 @@ class SelfContact:
         self.weights = gather(area.array[:n_owned].copy())
         n_cells = model.mesh.topology.index_map(model.mesh.topology.dim).size_local
         self.cells = np.vstack(comm.allgather(global_node[nodes.space.dofmap.list[:n_cells]]))
-        self.buffer, self.exclusion = buffer, exclusion
+        self.buffer, self.exclusion, self.side_hint = buffer, exclusion, side_hint
         self.reach = thickness + self.cutoff
         self.free_edges = free_edges(self.cells)
         # Q2 gradients at the cell's own nodes (reference coordinates): the nodal normals
@@ -190,19 +194,47 @@ class SelfContact:
         self._reference_version += 1
 
     def _sides(self, node: np.ndarray, cell: np.ndarray, search: CandidateSearch) -> dict:
-        """Side of each candidate partner at the converged state, and the projections' warm start."""
+        """Side of each candidate partner, and the projections' warm start.
+
+        With a ``side_hint`` (the order of the turns of a coil) the side is the hint's. Without,
+        it is read at the last converged state where the node lies over the partner cell there
+        (its closest point inside the cell), else at the search's positions. Both can be wrong:
+        material that comes onto a coil along its tangent lies ahead of the cells it will rest
+        on, below their tangent planes; and a node that has gone through its partner in a
+        converged step would stay through.
+        """
         stamp = (search.searches, self._reference_version)
         if search.data.get("stamp") != stamp:
-            xr = self.reference_positions
-            found = closest_points(xr[node], xr[self.cells[cell]])
-            above = np.einsum("pi,pi->p", found["direction"], found["normal"]) >= 0.0
-            search.data = {"stamp": stamp, "side": np.where(above, 1.0, -1.0), "start": found["ref"]}
+            xr, xs = self.reference_positions, search.positions_at_search
+            converged = closest_points(xr[node], xr[self.cells[cell]])
+            now = closest_points(xs[node], xs[self.cells[cell]])
+            inside = np.all((converged["ref"] > 1e-9) & (converged["ref"] < 1 - 1e-9), axis=1)
+            sign = {
+                name: np.einsum("pi,pi->p", found["direction"], found["normal"]) >= 0.0
+                for name, found in (("converged", converged), ("now", now))
+            }
+            if self.side_hint is None:
+                above = np.where(inside, sign["converged"], sign["now"])
+            else:
+                above = self.side_hint(node, cell) > 0
+            search.data = {"stamp": stamp, "side": np.where(above, 1.0, -1.0), "start": converged["ref"]}
         return search.data
 
-    def pairs(self, q: np.ndarray, search: CandidateSearch, dofs: np.ndarray | None = None) -> ContactPairs:
+    def pairs(
+        self,
+        q: np.ndarray,
+        search: CandidateSearch,
+        dofs: np.ndarray | None = None,
+        memory: np.ndarray | None = None,
+    ) -> ContactPairs:
         """This rank's contact pairs at the W-dof array ``q`` (collective: gathers positions).
 
         ``dofs`` (N, 3): the u-dofs to assemble into (constrained ones -1); default all.
+        ``memory`` (2 N,): the partner cell each node had on each side (-1: none), kept while
+        the node's closest point stays inside it and updated here; without it the closest
+        cell is taken. Where two cells are (nearly) equally close (a node over the edge
+        between them), the closest by round-off changes from one Newton iteration to the next
+        and the force with it, and Newton cycles; a kept partner does not.
         """
         x = self.positions(q)
         t0 = time.perf_counter()
@@ -229,16 +261,21 @@ class SelfContact:
         gap = side * normal_distance - self.h
         direction = side[:, None] * smooth
         distance = found["distance"]
-        keep = over
+        keep = over & (gap < self.cutoff)
         node, cell, gap, side, distance = node[keep], cell[keep], gap[keep], side[keep], distance[keep]
-        direction, found = direction[keep], {"N": found["N"][keep]}
-        near = gap < self.cutoff
+        direction, N, ref = direction[keep], found["N"][keep], found["ref"][keep]
         # the closest part of the surface on each side of each node
-        node, cell, gap, side, distance = node[near], cell[near], gap[near], side[near], distance[near]
-        direction, N = direction[near], found["N"][near]
-        order = np.lexsort((distance, side, node))
-        key = node[order] * 2 + (side[order] > 0)
+        keys = node * 2 + (side > 0)
+        if memory is None:
+            kept = np.zeros(len(node), dtype=bool)
+        else:
+            inside = np.all((ref > 1e-9) & (ref < 1 - 1e-9), axis=1)
+            kept = (memory[keys] == cell) & inside
+        order = np.lexsort((distance, ~kept, side, node))
+        key = keys[order]
         first = order[np.concatenate([[True], key[1:] != key[:-1]])] if len(order) else order
+        if memory is not None:
+            memory[keys[first]] = cell[first]
         node, cell, gap, N, e = node[first], cell[first], gap[first], N[first], direction[first]
         t2 = time.perf_counter()
         self.timings["search"] += t1 - t0
@@ -305,15 +342,31 @@ class SelfContactTerm:
         self.search, self.search_previous = contact.new_search(), contact.new_search()
         self._cache: dict[str, tuple[np.ndarray, ContactPairs]] = {}
         self._pattern: set[int] = set()
+        self._memory = np.full(2 * contact.n_nodes, -1, dtype=np.int64)
+        self._memory_converged, self._converged_version = self._memory.copy(), -1
         self.pattern_extensions = 0
 
     def _pairs(self, name: str, q: np.ndarray, search: CandidateSearch) -> ContactPairs:
         cached = self._cache.get(name)
         if cached is not None and np.array_equal(cached[0], q):
             return cached[1]
-        pairs = self.contact.pairs(q, search, self.dofs)
+        memory = self._memory if name == "current" else None
+        pairs = self.contact.pairs(q, search, self.dofs, memory)
         self._cache[name] = (q.copy(), pairs)
         return pairs
+
+    def begin(self) -> None:
+        """Before a solve: the partners kept are those of the last converged state.
+
+        A solve that follows a converged one takes the partners it ended with; a retry (after
+        a failed solve, from the same converged state) forgets what the failed one chose.
+        """
+        if self.contact._reference_version != self._converged_version:
+            self._memory_converged[:] = self._memory
+            self._converged_version = self.contact._reference_version
+        else:
+            self._memory[:] = self._memory_converged
+        self._cache.clear()
 
     def current(self) -> ContactPairs:
         return self._pairs("current", self.q.x.array, self.search)

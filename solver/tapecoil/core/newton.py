@@ -90,7 +90,7 @@ class SNESSolver:
         # assembled terms beyond the forms (contact between distant parts of the mesh): objects
         # with add_residual(b) and add_jacobian(A), called with the state in place, after the
         # forms and before the Dirichlet rows are set; add_jacobian returns True when it has
-        # widened A's nonzero pattern
+        # widened A's nonzero pattern; begin() is called before every solve
         self.terms: list = []
         # cumulative wall times [s]: residual and Jacobian assembly, and whole solves
         self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
@@ -176,6 +176,8 @@ class SNESSolver:
     def solve(self) -> SolveResult:
         """Solve from the current state ``q``; on failure ``q`` holds the last iterate."""
         self.norms.clear()
+        for term in self.terms:
+            term.begin()
         self.q.x.petsc_vec.copy(self.x)
         t0 = time.perf_counter()
         with self._options_in_database():

@@ -92,6 +92,7 @@ class TapeOnHub:
                 smoothing,
                 buffer,
                 exclusion=4 * (tp.h + buffer),
+                side_hint=self._coil_side,
             )
             self.search = self.self_contact.new_search()
         # strain + contact energy as forms (the turns' real contact is assembled on its own:
@@ -106,6 +107,18 @@ class TapeOnHub:
         if self.contact.energy_coil is not None:
             parts.append(("contact_coil", self.contact.energy_coil))
         self.forms = {name: dolfinx.fem.form(form) for name, form in parts}
+
+    def _coil_side(self, node: np.ndarray, cell: np.ndarray) -> np.ndarray:
+        """The side (+1, -1 along the surface's orientation) of cells their nodes lie on in a coil.
+
+        Material wound later lies outside: a node farther along the tape than the cell is on
+        the cell's outer side. The surface's orientation (xi_1 x xi_2, +z on the flat strip)
+        points away from the hub in opposite-sense coiling and towards it in equal-sense, and a
+        coil keeps it.
+        """
+        sc = self.self_contact
+        outside = sc.material[node, 0] > sc.material[sc.cells[cell], 0].mean(axis=1)
+        return self.frame.sign * np.where(outside, 1.0, -1.0)
 
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
