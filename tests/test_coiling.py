@@ -316,3 +316,35 @@ def test_equal_sense_coil_curves_with_its_section_and_flattens_on_the_hub(coiled
     wound = (psi > 1.0) & (psi < 2 * math.pi - 1.0) & (np.abs(nodes.xi[1]) < 1e-9)
     assert wound.any()
     assert np.all(np.abs(distance[wound] - rho) < 0.5 * tp.h)
+
+
+def test_surface_contact_keeps_the_second_turn_off_the_first():
+    """contact.turns = "surface": a short tape coiled past its first turn (the climb over the root).
+
+    Read from the nodes' positions, independently of the contact's gap: along the centre line
+    the second turn's mid-surface lies at least 0.9 h outside the first at the same winding
+    angle (the coarse mesh: 12 mm elements on a 12.7 mm hub), and the contact forces of the
+    turns on each other sum to zero.
+    """
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+
+    angle = 2 * math.pi + 1.2
+    cfg = short_tape(hub_angle=angle)
+    cfg = dataclasses.replace(cfg, contact=dataclasses.replace(cfg.contact, turns="surface"))
+    model = CoilingModel(cfg, MPI.COMM_SELF)
+    result = CoilingRun(model).run()
+    assert result.completed, result.message
+    line = model.tape.centre_line()
+    h = cfg.tape.h
+    psi = np.linspace(2 * math.pi + 0.3, angle - 0.3, 7)
+    outer = np.interp(psi, line["psi"], line["radius"])
+    inner = np.interp(psi - 2 * math.pi, line["psi"], line["radius"])
+    assert np.all(outer - inner >= 0.9 * h), (outer - inner) / h
+    import dolfinx
+
+    force = dolfinx.fem.Function(model.model.W)
+    model.tape.add_self_contact_force(force)
+    f = force.x.array[model.contact.nodes.u_dofs]
+    assert np.abs(f).sum() > 0
+    assert np.abs(f.sum(axis=0)).max() <= 1e-10 * np.abs(f).sum()
