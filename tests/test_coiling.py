@@ -348,3 +348,13 @@ def test_surface_contact_keeps_the_second_turn_off_the_first():
     f = force.x.array[model.contact.nodes.u_dofs]
     assert np.abs(f).sum() > 0
     assert np.abs(f.sum(axis=0)).max() <= 1e-10 * np.abs(f).sum()
+
+
+def test_hub_torque_from_the_reactions_matches_the_energy_balance(coiled_short):
+    """Two readings of the hub torque: the root's reactions and the steps' energy balance."""
+    from tapecoil.measures.coiling import hub_torque_measure
+
+    _, history = coiled_short
+    measure = hub_torque_measure(history)
+    assert measure is not None and measure["work_energy_balance_J"] > 0
+    assert measure["passed"], measure

@@ -151,6 +151,30 @@ class CoilingModel:
         self.tape.add_self_contact_force(self._reaction_vector)
         return b.array
 
+    def hub_torque(self, internal_force: np.ndarray | None = None, eps: float = 1e-6) -> float:
+        """The torque the tape exerts on the hub through the root's reactions [N m] (collective).
+
+        The reaction on each attached dof times the rate at which the hub's turning moves it,
+        d q_root / d hub angle (central differences of the attachment), summed: the virtual
+        work of the reactions in a turn of the hub. The hub contact is frictionless and its
+        pressure passes through the axis, so it adds none. Independent of the energy balance
+        of the steps (the history's hub_torque).
+        """
+        f = self.internal_force() if internal_force is None else internal_force
+        angle, owned = self.root.angle, self.model.W.dofmap.index_map.size_local
+        shifted = []
+        for sign in (1.0, -1.0):
+            self.root.set(1.0, angle + sign * eps)
+            values = np.zeros_like(f)
+            for bc in self.root.bcs:
+                bc.set(values)
+            shifted.append(values)
+        self.root.set(1.0, angle)
+        dofs = np.concatenate([bc.dof_indices()[0] for bc in self.root.bcs])
+        dofs = dofs[dofs < owned]
+        rate = (shifted[0][dofs] - shifted[1][dofs]) / (2 * eps)
+        return float(self.comm.allreduce(float(np.dot(f[dofs], rate)), op=MPI.SUM))
+
     def edge_forces(self) -> dict[str, float]:
         """Forces at the two ends from one assembly of the internal force [N] (collective).
 

@@ -20,7 +20,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation, StepRecord
-from tapecoil.measures.coiling import coil_measures, coiled_cells, ploy_measure
+from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_measure, ploy_measure
 from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.tape_on_hub import check_penetration
@@ -106,6 +106,7 @@ class CoilingRun:
             "cutbacks": step.cutbacks,
             "relaxed": int(step.relaxed),
             "hub_torque": torque,
+            "hub_torque_reaction": m.hub_torque() if phase == "coil" else "",
             "tension": tension,
             "root_tension": root_tension,
             "coiling_tension": tension - root_tension,
@@ -269,6 +270,9 @@ class CoilingPhase(Phase):
         measures = coil_measures(model.tape, self._cells)
         if self.ploy:
             measures["ploy_length_one_turn"] = self.ploy
+        torque = hub_torque_measure(history)
+        if torque is not None:
+            measures["hub_torque"] = torque
         timing = model.solver.timing_per_iteration()
         return {
             "completed": self.completed,

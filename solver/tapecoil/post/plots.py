@@ -114,6 +114,8 @@ def coiling_forces(directory: Path) -> Path | None:
     rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
     steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
     ax[1].plot(angle, h["hub_torque"] * 1e3, ".-", label="shell (secant of the energy balance)")
+    if "hub_torque_reaction" in h:
+        ax[1].plot(angle, h["hub_torque_reaction"] * 1e3, "-", label="shell (the root's reactions)")
     ax[1].plot(angle, steady * 1e3, "--", label="steady coiling r (T + b w(r))")
     ax[1].set(xlabel="hub angle [rad]", ylabel="hub torque [N mm]", title="hub torque")
     return _save(fig, figures / "coiling_forces.png")
