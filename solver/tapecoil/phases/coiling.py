@@ -175,8 +175,10 @@ class CoilingModel:
         rate = (shifted[0][dofs] - shifted[1][dofs]) / (2 * eps)
         return float(self.comm.allreduce(float(np.dot(f[dofs], rate)), op=MPI.SUM))
 
-    def edge_forces(self) -> dict[str, float]:
+    def edge_forces(self, internal_force: np.ndarray | None = None) -> dict[str, float]:
         """Forces at the two ends from one assembly of the internal force [N] (collective).
+
+        ``internal_force``: :meth:`internal_force` at the current state, if the caller has it.
 
         ``tension``: the internal force along +x on the free end, what the pull holds.
         ``root_tension``: the axial force N the tape carries into the root attachment (tension
@@ -185,7 +187,7 @@ class CoilingModel:
         along the tape (the configurational force balance of physics.md Sec. 5), so T - N is the
         coiling tension M kappa - U of the first turn: Eq. 2.6 for a flattened coil.
         """
-        f = self.internal_force()
+        f = self.internal_force() if internal_force is None else internal_force
         angle = self.root.angle
         direction = self.frame.tangent(angle)
         root = sum(direction[i] * float(f[dofs].sum()) for i, dofs in enumerate(self._root_dofs))

@@ -84,7 +84,8 @@ class CoilingRun:
         e = m.tape.energies()
         slide = m.end_slide()
         geometry = m.tape.coil_geometry(angle)
-        forces = m.edge_forces()
+        internal = m.internal_force()  # one assembly for the end forces and the hub torque
+        forces = m.edge_forces(internal)
         tension, root_tension = forces["tension"], forces["root_tension"]
         # hub torque from the energy balance of the step: work of the hub = change of stored
         # energy + work against the pull (secant over the step). The applied pull, not the
@@ -106,7 +107,7 @@ class CoilingRun:
             "cutbacks": step.cutbacks,
             "relaxed": int(step.relaxed),
             "hub_torque": torque,
-            "hub_torque_reaction": m.hub_torque() if phase == "coil" else "",
+            "hub_torque_reaction": m.hub_torque(internal) if phase == "coil" else "",
             "tension": tension,
             "root_tension": root_tension,
             "coiling_tension": tension - root_tension,
