@@ -196,7 +196,7 @@ def _folded_energy_and_force(comm):
     term.add_residual(b_vec)
     norm = b_vec.norm()
     b_vec.destroy()
-    return contact.energy(model.q.x.array, contact.new_search()), norm
+    return contact.energy(contact.pairs(model.q.x.array, contact.new_search())), norm
 
 
 @pytest.mark.mpi

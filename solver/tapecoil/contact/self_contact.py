@@ -93,6 +93,11 @@ def free_edges(cells: np.ndarray) -> np.ndarray:
     return (counts[inverse.ravel()] == 1).reshape(-1, 4)
 
 
+def inside_cell(ref: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
+    """Whether reference points (n, 2) lie strictly inside their cells (off every edge)."""
+    return np.all((ref > tolerance) & (ref < 1 - tolerance), axis=1)
+
+
 def on_free_edge(ref: np.ndarray, free: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
     """Whether reference points (n, 2) lie on a free edge of their cells (``free`` (n, 4))."""
     at = np.stack(
@@ -205,18 +210,18 @@ class SelfContact:
         """
         stamp = (search.searches, self._reference_version)
         if search.data.get("stamp") != stamp:
-            xr, xs = self.reference_positions, search.positions_at_search
+            xr = self.reference_positions
             converged = closest_points(xr[node], xr[self.cells[cell]])
-            now = closest_points(xs[node], xs[self.cells[cell]])
-            inside = np.all((converged["ref"] > 1e-9) & (converged["ref"] < 1 - 1e-9), axis=1)
-            sign = {
-                name: np.einsum("pi,pi->p", found["direction"], found["normal"]) >= 0.0
-                for name, found in (("converged", converged), ("now", now))
-            }
-            if self.side_hint is None:
-                above = np.where(inside, sign["converged"], sign["now"])
-            else:
+            if self.side_hint is not None:
                 above = self.side_hint(node, cell) > 0
+            else:
+                xs = search.positions_at_search
+                now = closest_points(xs[node], xs[self.cells[cell]])
+                above = np.where(
+                    inside_cell(converged["ref"]),
+                    np.einsum("pi,pi->p", converged["direction"], converged["normal"]) >= 0.0,
+                    np.einsum("pi,pi->p", now["direction"], now["normal"]) >= 0.0,
+                )
             search.data = {"stamp": stamp, "side": np.where(above, 1.0, -1.0), "start": converged["ref"]}
         return search.data
 
@@ -241,7 +246,8 @@ class SelfContact:
         node, cell = search.candidates(x, self.owned)
         t1 = time.perf_counter()
         data = self._sides(node, cell, search)
-        # from the search's projections, so that the residual is a function of the state alone
+        # from the converged state's projections (fixed between searches), so that the residual
+        # is a function of the state alone
         found = closest_points(x[node], x[self.cells[cell]], iterations=6, start=data["start"])
         side = data["side"]
         # the gap is counted along the partner's smoothed normal (the Q2 surface is only C0:
@@ -269,8 +275,7 @@ class SelfContact:
         if memory is None:
             kept = np.zeros(len(node), dtype=bool)
         else:
-            inside = np.all((ref > 1e-9) & (ref < 1 - 1e-9), axis=1)
-            kept = (memory[keys] == cell) & inside
+            kept = (memory[keys] == cell) & inside_cell(ref)
         order = np.lexsort((distance, ~kept, side, node))
         key = keys[order]
         first = order[np.concatenate([[True], key[1:] != key[:-1]])] if len(order) else order
@@ -299,24 +304,49 @@ class SelfContact:
             energy=float(np.sum(0.5 * kw * p**2)),
         )
 
-    def energy(self, q: np.ndarray, search: CandidateSearch) -> float:
-        """The penalty energy of the whole surface [J] (collective)."""
-        return self.comm.allreduce(self.pairs(q, search).energy, op=MPI.SUM)
+    def energy(self, pairs: ContactPairs) -> float:
+        """The penalty energy of the whole surface [J] from every rank's ``pairs`` (collective)."""
+        return self.comm.allreduce(pairs.energy, op=MPI.SUM)
 
-    def add_force(self, force, q: np.ndarray, search: CandidateSearch) -> None:
-        """Add the contact force dE/dq at ``q`` to the dolfinx Function ``force`` (collective)."""
-        pairs = self.pairs(q, search)
+    def add_force(self, force, pairs: ContactPairs) -> None:
+        """Add the contact force dE/dq of ``pairs`` to the dolfinx Function ``force`` (collective)."""
         vec = force.x.petsc_vec
         vec.setValues(pairs.dofs.ravel(), (pairs.force[:, None] * pairs.B).ravel(), addv=PETSc.InsertMode.ADD)
         vec.assemblyBegin()
         vec.assemblyEnd()
         vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
 
-    def max_penetration(self, q: np.ndarray, search: CandidateSearch) -> float:
+    def max_penetration(self, pairs: ContactPairs) -> float:
         """The deepest penetration -g of any part of the surface into another [m], >= 0 (collective)."""
-        gap = self.pairs(q, search).gap
-        local = float(-gap.min()) if gap.size else 0.0
+        local = float(-pairs.gap.min()) if pairs.gap.size else 0.0
         return max(self.comm.allreduce(local, op=MPI.MAX), 0.0)
+
+
+class PairsAtState:
+    """The contact pairs of one state, kept while that state and the converged one are unchanged.
+
+    The decision is collective: :meth:`SelfContact.pairs` gathers positions from every rank,
+    so every rank must agree to compute them again, also when only some ranks' dofs changed.
+    """
+
+    def __init__(self, contact: SelfContact):
+        self.contact = contact
+        self.clear()
+
+    def clear(self) -> None:
+        self._q = self._version = self._pairs = None
+
+    def get(self, q: np.ndarray, compute) -> ContactPairs:
+        """The pairs at the W-dof array ``q``: kept ones, or ``compute()`` (collective)."""
+        same = (
+            self._q is not None
+            and self._version == self.contact._reference_version
+            and np.array_equal(self._q, q)
+        )
+        if self.contact.comm.allreduce(int(not same), op=MPI.MAX):
+            self._pairs = compute()
+            self._q, self._version = q.copy(), self.contact._reference_version
+        return self._pairs
 
 
 class SelfContactTerm:
@@ -340,20 +370,15 @@ class SelfContactTerm:
         self.dofs = np.where(np.isin(contact.u_dofs, fixed), -1, contact.u_dofs).astype(PETSc.IntType)
         self.weight, self.previous = weight, previous
         self.search, self.search_previous = contact.new_search(), contact.new_search()
-        self._cache: dict[str, tuple[np.ndarray, ContactPairs]] = {}
+        self._kept = {"current": PairsAtState(contact), "previous": PairsAtState(contact)}
         self._pattern: set[int] = set()
         self._memory = np.full(2 * contact.n_nodes, -1, dtype=np.int64)
         self._memory_converged, self._converged_version = self._memory.copy(), -1
         self.pattern_extensions = 0
 
     def _pairs(self, name: str, q: np.ndarray, search: CandidateSearch) -> ContactPairs:
-        cached = self._cache.get(name)
-        if cached is not None and np.array_equal(cached[0], q):
-            return cached[1]
         memory = self._memory if name == "current" else None
-        pairs = self.contact.pairs(q, search, self.dofs, memory)
-        self._cache[name] = (q.copy(), pairs)
-        return pairs
+        return self._kept[name].get(q, lambda: self.contact.pairs(q, search, self.dofs, memory))
 
     def begin(self) -> None:
         """Before a solve: the partners kept are those of the last converged state.
@@ -366,7 +391,8 @@ class SelfContactTerm:
             self._converged_version = self.contact._reference_version
         else:
             self._memory[:] = self._memory_converged
-        self._cache.clear()
+        for kept in self._kept.values():
+            kept.clear()
 
     def current(self) -> ContactPairs:
         return self._pairs("current", self.q.x.array, self.search)

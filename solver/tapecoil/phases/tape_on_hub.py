@@ -17,7 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
-from tapecoil.contact.self_contact import SelfContact, SelfContactTerm
+from tapecoil.contact.self_contact import PairsAtState, SelfContact, SelfContactTerm
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
@@ -95,6 +95,7 @@ class TapeOnHub:
                 side_hint=self._coil_side,
             )
             self.search = self.self_contact.new_search()
+            self._measured = PairsAtState(self.self_contact)
         # strain + contact energy as forms (the turns' real contact is assembled on its own:
         # add_self_contact_force)
         self.energy = model.strain_energy + self.contact.energy
@@ -128,7 +129,7 @@ class TapeOnHub:
     def energies(self) -> dict[str, float]:
         out = {name: global_scalar(form, self.model.mesh.comm) for name, form in self.forms.items()}
         if self.self_contact is not None:
-            out["contact_coil"] = self.self_contact.energy(self.model.q.x.array, self.search)
+            out["contact_coil"] = self.self_contact.energy(self._self_contact_pairs())
         out["strain"] = out["membrane"] + out["bending"] + out["shear"]
         out["contact"] = out["contact_hub"] + out["contact_coil"]
         return out
@@ -179,13 +180,18 @@ class TapeOnHub:
         hub = max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
         if self.self_contact is None:
             return hub
-        return max(hub, self.self_contact.max_penetration(self.model.q.x.array, self.search))
+        return max(hub, self.self_contact.max_penetration(self._self_contact_pairs()))
 
     def add_self_contact_force(self, force: dolfinx.fem.Function) -> None:
         """Add the force of the turns' real contact dE/dq at the current state to ``force``
         (collective; nothing with the spiral obstacle, whose force is in ``energy``)."""
         if self.self_contact is not None:
-            self.self_contact.add_force(force, self.model.q.x.array, self.search)
+            self.self_contact.add_force(force, self._self_contact_pairs())
+
+    def _self_contact_pairs(self):
+        """The turns' contact pairs at the current state, once per state for all the measures."""
+        q = self.model.q.x.array
+        return self._measured.get(q, lambda: self.self_contact.pairs(q, self.search))
 
     def accept_state(self) -> None:
         """After a converged step: the turns' real contact reads its sides from this state."""
