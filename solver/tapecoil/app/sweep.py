@@ -162,7 +162,7 @@ def run_sweep(sweep: Sweep, directory: str | Path, comm=MPI.COMM_WORLD, progress
     comm.barrier()
     cases = sweep.cases()
     if sweep.study != "coiling_tension" and comm.rank == 0:
-        from tapecoil.app.cli import warn_before_coiling
+        from tapecoil.app.checks import warn_before_coiling
 
         for case in cases:  # every case's, before any case is computed
             warn_before_coiling(sweep.config(case), prefix=f"sweep case {case}: ")
@@ -202,7 +202,7 @@ def _run_case(sweep: Sweep, index: int, case: dict, directory: Path, comm) -> No
                 json.dumps({"case": case, "coiling_tension": result}, indent=2)
             )
         return
-    from tapecoil.app.cli import warn_before_coiling
+    from tapecoil.app.checks import warn_before_coiling
     from tapecoil.app.pipeline import run
 
     # the console had it from run_sweep; the case's own log has it here
