@@ -1,0 +1,88 @@
+"""Analytic theory of tape-spring coiling and deployment (physics brief, thesis equations).
+
+All functions take and return SI units. Equation numbers are the thesis's; where the thesis
+is inconsistent the physics brief's consistent form is used and the docstring says so.
+
+numpy and scipy only, so that ``tapecoil theory`` starts without DOLFINx. By job:
+
+- :mod:`~tapecoil.theory.plate`: rigidity, energy densities, section and fold moments, coil
+  stresses (and their sign convention), ploy length;
+- :mod:`~tapecoil.theory.coil_geometry`: turn radii, coiled length against hub rotation and coil
+  radius, stored energy;
+- :mod:`~tapecoil.theory.coiling_tension`: the coiling regimes and their tension laws;
+- :mod:`~tapecoil.theory.deployment`: the deployment rate, its closed forms and the ODE;
+- :mod:`~tapecoil.theory.table`: :class:`Prediction` and :func:`predictions`, the table.
+
+Every name is available here too: ``from tapecoil import theory; theory.stored_energy(...)``.
+"""
+
+from tapecoil.theory.coil_geometry import (
+    coil_radius_during_deployment,
+    coiled_length_from_radius,
+    coiled_length_from_rotation,
+    max_hub_angle,
+    outer_radius_after_rotation,
+    radius_from_coiled_length,
+    rotation_for_coiled_length,
+    stored_energy,
+    turn_radius,
+)
+from tapecoil.theory.coiling_tension import (
+    UNIQUENESS_LIMIT,
+    coiling_regime,
+    coiling_tension_bending,
+    coiling_tension_growing,
+    coiling_tension_tension_dominated,
+    required_coiling_tension,
+)
+from tapecoil.theory.deployment import (
+    DeploymentSolution,
+    deployed_fraction,
+    deployment_time,
+    deployment_time_lambda0,
+    seffen_rate,
+    solve_deployment_ode,
+)
+from tapecoil.theory.plate import (
+    arc_second_moment,
+    coil_stresses,
+    energy_density,
+    flexural_rigidity,
+    fold_moment,
+    opposite_sense_energy_density,
+    ploy_length,
+)
+from tapecoil.theory.table import Prediction, predictions
+
+__all__ = [
+    "UNIQUENESS_LIMIT",
+    "DeploymentSolution",
+    "Prediction",
+    "arc_second_moment",
+    "coil_radius_during_deployment",
+    "coil_stresses",
+    "coiled_length_from_radius",
+    "coiled_length_from_rotation",
+    "coiling_regime",
+    "coiling_tension_bending",
+    "coiling_tension_growing",
+    "coiling_tension_tension_dominated",
+    "deployed_fraction",
+    "deployment_time",
+    "deployment_time_lambda0",
+    "energy_density",
+    "flexural_rigidity",
+    "fold_moment",
+    "max_hub_angle",
+    "opposite_sense_energy_density",
+    "outer_radius_after_rotation",
+    "ploy_length",
+    "predictions",
+    "radius_from_coiled_length",
+    "required_coiling_tension",
+    "rotation_for_coiled_length",
+    "seffen_rate",
+    "solve_deployment_ode",
+    "stored_energy",
+    "turn_radius",
+]

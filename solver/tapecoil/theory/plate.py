@@ -1,0 +1,74 @@
+"""Plate and section formulas of a tape spring: rigidity, energy densities, moments, stresses.
+
+Physics brief sections 3, 4 and 7; SI units.
+
+Sign convention for stresses: z is the distance from the mid-surface, positive on the face
+away from the hub (the outer face of the coil). In opposite-sense coiling both the coil
+curvature and the flattening of the cross-section stretch that face, so the outer face is in
+tension in both directions and the inner face in compression.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def flexural_rigidity(E: float, h: float, nu: float) -> float:
+    """Plate flexural rigidity D = E h^3 / (12 (1 - nu^2)) [N m]."""
+    return E * h**3 / (12 * (1 - nu**2))
+
+
+def opposite_sense_energy_density(D: float, nu: float, R: float) -> float:
+    """mu = D (1 + nu) / R^2 [J/m^2]: energy per unit area of the opposite-sense coil of radius R."""
+    return D * (1 + nu) / R**2
+
+
+def energy_density(rho: float | np.ndarray, R: float, D: float, nu: float) -> float | np.ndarray:
+    """Kirchhoff plate energy per unit area of a flattened section coiled to radius rho [J/m^2].
+
+    w(rho) = (D/2) (1/rho^2 + 1/R^2 + 2 nu / (rho R)); w(R) = mu (physics brief section 3).
+    """
+    return 0.5 * D * (1 / rho**2 + 1 / R**2 + 2 * nu / (rho * R))
+
+
+def arc_second_moment(R: float, alpha: float, h: float) -> float:
+    """Second moment of area of a thin circular-arc section about its centroidal axis [m^4].
+
+    The axis is parallel to the chord (bending about the tape's width axis). Thin-wall form
+    I = R^3 h (beta + sin(beta) cos(beta) - 2 sin(beta)^2 / beta), beta = alpha/2, plus the
+    plate term b h^3 / 12 of the wall's own bending.
+    """
+    beta = alpha / 2
+    s, c = math.sin(beta), math.cos(beta)
+    return R**3 * h * (beta + s * c - 2 * s * s / beta) + R * alpha * h**3 / 12
+
+
+def fold_moment(D: float, nu: float, alpha: float) -> float:
+    """Steady moment of a localised opposite-sense fold, (1 + nu) D alpha [N m].
+
+    Wuest (1954); Seffen and Pellegrino (1999). It is the moment plateau after the snap when a
+    tape is bent so that its cross-section flattens.
+    """
+    return (1 + nu) * D * alpha
+
+
+def coil_stresses(rho: float, R: float, E: float, nu: float, z: float) -> tuple[float, float]:
+    """Plane-stress bending stresses (sigma_x, sigma_y) [Pa] at z in a coil of radius rho.
+
+    Curvature changes +1/rho (longitudinal) and +1/R (transverse, flattening): eps_x = z/rho,
+    eps_y = z/R. z > 0 on the outer face (see the module docstring); use z = +-h/2.
+    """
+    c = E / (1 - nu**2) * z
+    return c * (1 / rho + nu / R), c * (1 / R + nu / rho)
+
+
+def ploy_length(width: float, R: float, h: float, beta: float = 1.0) -> float:
+    """Eq. 3.5, dimensionally consistent reading: L_p = w^2 / (sqrt(70) beta^(1/4) sqrt(R h)) [m].
+
+    As printed (R^2 t^(1/2) in the denominator) the formula is not a length. beta = 1 for an
+    isotropic tape. The prefactor is uncertain: evaluate it for both the arc width and the
+    projected width and compare with the measured transition length.
+    """
+    return width**2 / (math.sqrt(70) * beta**0.25 * math.sqrt(R * h))
