@@ -1,71 +1,16 @@
-"""Run parameters: typed dataclasses in SI units, loaded from TOML and checked before any work.
+"""The sections of a run's configuration, one dataclass per TOML table, and :class:`Config`, all of them.
 
-The defaults are the benchmark tape of the physics brief (thesis Table 3.1, annealed BeCu) and
-its loading (Table 3.2). Every field carries its unit and its allowed range in the field
-metadata; :func:`load_config` refuses an unknown key, a wrong type or an out-of-range value
-with a :class:`ConfigError` that names the key (``tape.h``) and what is allowed. It also
-refuses a hub rotation longer than the tape can give, so that it is not found only after hours
-of computing. A pull below the tension the hub needs is no error: :meth:`Config.coiling_warnings`
-names it, and the commands that start a coiling warn of it (:class:`ConfigWarning`) before
-computing; loading a configuration (for a report, a plot, a tension study) does not.
+Each field is a :func:`~tapecoil.config.params.param` with its SI unit and allowed range; the
+``check`` methods add what relates two fields or two sections.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, get_type_hints
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10 (conda environments)
-    import tomli as tomllib
-
-
-class ConfigError(ValueError):
-    """A configuration value that cannot be used; the message names the key and the range."""
-
-
-class ConfigWarning(UserWarning):
-    """A configuration that can be run but is unlikely to give what it asks for; names the key."""
-
-
-@dataclass(frozen=True)
-class Range:
-    """Allowed interval of a numeric parameter; open or closed at each end."""
-
-    lo: float = -math.inf
-    hi: float = math.inf
-    lo_open: bool = False
-    hi_open: bool = False
-
-    def contains(self, x: float) -> bool:
-        above = x > self.lo if self.lo_open else x >= self.lo
-        below = x < self.hi if self.hi_open else x <= self.hi
-        return above and below
-
-    def describe(self) -> str:
-        if self.hi == math.inf:
-            return f"{'>' if self.lo_open else '>='} {self.lo:g}"
-        if self.lo == -math.inf:
-            return f"{'<' if self.hi_open else '<='} {self.hi:g}"
-        return f"in {'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}{')' if self.hi_open else ']'}"
-
-
-POSITIVE = Range(0.0, lo_open=True)
-NON_NEGATIVE = Range(0.0)
-
-
-def param(default: Any, unit: str = "", allowed: Range | tuple[str, ...] | None = None, **kw):
-    """A dataclass field with its unit and allowed values recorded for validation and docs."""
-    if isinstance(default, (dict, list)):
-        return field(
-            default_factory=lambda: type(default)(default), metadata={"unit": unit, "allowed": allowed}, **kw
-        )
-    return field(default=default, metadata={"unit": unit, "allowed": allowed}, **kw)
+from tapecoil.config.params import NON_NEGATIVE, POSITIVE, ConfigError, Range, check_section, param
 
 
 @dataclass
@@ -371,7 +316,7 @@ class Config:
     def check(self) -> None:
         """Validate every section and the relations between sections."""
         for f in dataclasses.fields(self):
-            _check_section(f.name, getattr(self, f.name))
+            check_section(f.name, getattr(self, f.name))
         if self.hub.radius <= 2 * self.tape.h:
             raise ConfigError(
                 f"hub.radius = {self.hub.radius:g} m must exceed twice tape.h = {self.tape.h:g} m"
@@ -384,7 +329,7 @@ class Config:
         Raises :class:`ConfigError` naming ``coiling.hub_angle`` when the hub angle exceeds
         :func:`tapecoil.theory.max_hub_angle`.
         """
-        from tapecoil import theory  # theory imports this module
+        from tapecoil import theory  # theory imports tapecoil.config
 
         tp, r_hub, coiling = self.tape, self.hub.radius, self.coiling
         largest = theory.max_hub_angle(tp.L, r_hub, tp.h)
@@ -405,7 +350,7 @@ class Config:
         sweeps) warn of these just before they start; loading a configuration for anything else
         (a report, a plot, a tension study with its own pull) stays quiet.
         """
-        from tapecoil import theory  # theory imports this module
+        from tapecoil import theory  # theory imports tapecoil.config
 
         tp, r_hub, coiling = self.tape, self.hub.radius, self.coiling
         needed = theory.required_coiling_tension(tp.D, tp.alpha, tp.R, r_hub, tp.h)
@@ -419,120 +364,3 @@ class Config:
             f"and the coiling stalls (with no pull the benchmark tape stalls at 2.49 rad on the "
             f"coarse mesh)"
         ]
-
-
-def _type_name(tp: Any) -> str:
-    return {
-        float: "a number",
-        int: "an integer",
-        bool: "true or false",
-        str: "a string",
-        dict: "a table",
-    }.get(tp, str(tp))
-
-
-def _coerce(key: str, tp: Any, value: Any) -> Any:
-    """Check a TOML value against the field type; ints are accepted where floats are."""
-    ok = (
-        (tp is float and isinstance(value, (int, float)) and not isinstance(value, bool))
-        or (tp is int and isinstance(value, int) and not isinstance(value, bool))
-        or (tp is bool and isinstance(value, bool))
-        or (tp is str and isinstance(value, str))
-        or (tp is dict and isinstance(value, dict))
-    )
-    if not ok:
-        raise ConfigError(f"{key} must be {_type_name(tp)} (got {type(value).__name__} {value!r})")
-    if tp is float:
-        value = float(value)
-        if not math.isfinite(value):
-            raise ConfigError(f"{key} must be a finite number (got {value!r})")
-    if tp is dict:
-        for k, v in value.items():
-            if not isinstance(v, (str, int, float, bool)):
-                raise ConfigError(f"{key}.{k} must be a string, number or boolean (got {type(v).__name__})")
-    return value
-
-
-def _check_section(name: str, section: Any) -> None:
-    hints = get_type_hints(type(section))
-    for f in dataclasses.fields(section):
-        key = f"{name}.{f.name}"
-        value = _coerce(key, hints[f.name], getattr(section, f.name))
-        allowed, unit = f.metadata.get("allowed"), f.metadata.get("unit", "")
-        if isinstance(allowed, Range) and not allowed.contains(value):
-            raise ConfigError(
-                f"{key} = {value!r} is out of range: must be {allowed.describe()}{f' [{unit}]' * bool(unit)}"
-            )
-        if isinstance(allowed, tuple) and value not in allowed:
-            raise ConfigError(
-                f"{key} = {value!r} is not allowed: must be one of {', '.join(map(repr, allowed))}"
-            )
-    if hasattr(section, "check"):
-        section.check()
-
-
-def config_from_dict(data: dict[str, Any]) -> Config:
-    """Build and validate a :class:`Config` from a nested mapping (parsed TOML)."""
-    sections = {f.name: f for f in dataclasses.fields(Config)}
-    kwargs = {}
-    for name, table in data.items():
-        if name not in sections:
-            raise ConfigError(f"unknown section [{name}] (known: {', '.join(sections)})")
-        if not isinstance(table, dict):
-            raise ConfigError(f"[{name}] must be a table of keys")
-        cls = sections[name].default_factory
-        hints = get_type_hints(cls)
-        known = {f.name for f in dataclasses.fields(cls)}
-        for key, value in table.items():
-            if key not in known:
-                raise ConfigError(f"unknown key {name}.{key} (known in [{name}]: {', '.join(sorted(known))})")
-            table[key] = _coerce(f"{name}.{key}", hints[key], value)
-        kwargs[name] = cls(**table)
-    config = Config(**kwargs)
-    config.check()
-    return config
-
-
-def load_config(path: str | Path | None = None) -> Config:
-    """Read a TOML file (or the defaults when ``path`` is None) and validate it."""
-    if path is None:
-        config = Config()
-        config.check()
-        return config
-    path = Path(path)
-    try:
-        with path.open("rb") as f:
-            data = tomllib.load(f)
-    except FileNotFoundError:
-        raise ConfigError(f"configuration file not found: {path}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path} is not valid TOML: {exc}") from None
-    return config_from_dict(data)
-
-
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, float):
-        return repr(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    return str(v)
-
-
-def to_toml(config: Config) -> str:
-    """The configuration as TOML, with units as comments; ``load_config`` reads it back."""
-    lines = []
-    for sec in dataclasses.fields(config):
-        section = getattr(config, sec.name)
-        lines.append(f"[{sec.name}]")
-        for f in dataclasses.fields(section):
-            v = getattr(section, f.name)
-            if isinstance(v, dict):
-                inner = ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items())
-                lines.append(f"{f.name} = {{{inner}}}")
-                continue
-            unit = f.metadata.get("unit", "")
-            lines.append(f"{f.name} = {_toml_value(v)}" + (f"  # [{unit}]" if unit and unit != "-" else ""))
-        lines.append("")
-    return "\n".join(lines)

@@ -1,0 +1,57 @@
+"""``tapecoil verify``: the shell verification cases against their references."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from tapecoil.app.commands.common import echo
+from tapecoil.config import load_config
+
+
+def cmd_verify(args: argparse.Namespace) -> int:
+    import time
+
+    config = load_config(args.config)
+    from tapecoil.verification import CASES
+    from tapecoil.verification.cases import run_case
+
+    names = CASES if args.case == "all" else (args.case,)
+    results = []
+    for name in names:
+        t0 = time.perf_counter()
+        result = run_case(name, config, args.mesh)
+        result.info["case_wall_time"] = time.perf_counter() - t0
+        results.append(result)
+        if not args.json:
+            mesh, wall = result.info.get("mesh", ""), result.info["case_wall_time"]
+            echo(f"{name} ({result.info['preset']} mesh, {mesh}, {wall:.1f} s)")
+            for c in result.checks:
+                err = f"{c.error:.2e}" + ("" if c.absolute else " rel")
+                echo(
+                    f"  {c.name:<40} computed {c.computed:<12.6g} reference {c.reference:<10.6g} "
+                    f"error {err:<13} tol {c.tolerance:g}  {'PASS' if c.passed else 'FAIL'}"
+                )
+    if args.json:
+        payload = [
+            {
+                "case": r.case,
+                "passed": r.passed,
+                "checks": [
+                    {
+                        "name": c.name,
+                        "computed": c.computed,
+                        "reference": c.reference,
+                        "error": c.error,
+                        "tolerance": c.tolerance,
+                        "absolute": c.absolute,
+                        "passed": c.passed,
+                    }
+                    for c in r.checks
+                ],
+                "info": r.info,
+            }
+            for r in results
+        ]
+        echo(json.dumps(payload, indent=2, default=float))
+    return 0 if all(r.passed for r in results) else 1
