@@ -93,12 +93,48 @@ def test_options_do_not_leak_to_the_next_solver():
         s.destroy()
 
 
-def test_the_step_tolerance_is_petscs_unless_set(user_options):
-    """snes_stol (the step test that ends the relaxation's solves at round-off) from a table or the user."""
-    assert solver("toy_").snes.getTolerances()[2] == 1e-8
-    assert solver("toy_", SolverConfig(petsc_options={"snes_stol": 0})).snes.getTolerances()[2] == 0.0
-    user_options("toy_snes_stol", 1e-6)
-    assert solver("toy_", SolverConfig(petsc_options={"snes_stol": 0})).snes.getTolerances()[2] == 1e-6
+def offset_problem(offset):
+    """-div grad u + (u - c)^3 = 1, u = c on the boundary, c = ``offset``: the toy problem's
+    solution shifted by c, so that a large state norm sits beside a small correction."""
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 6, 6)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
+    u = dolfinx.fem.Function(V)
+    u.x.array[:] = offset
+    v = ufl.TestFunction(V)
+    F = (ufl.inner(ufl.grad(u), ufl.grad(v)) + (u - offset) ** 3 * v - v) * ufl.dx
+    J = ufl.derivative(F, u, ufl.TrialFunction(V))
+    mesh.topology.create_connectivity(1, 2)
+    facets = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+    bc = dolfinx.fem.dirichletbc(float(offset), dolfinx.fem.locate_dofs_topological(V, 1, facets), V)
+    return F, J, u, [bc]
+
+
+def test_convergence_is_judged_on_the_residual(user_options):
+    """A small Newton step against a large state does not end a solve; the residual does.
+
+    With the state at 1e7 (as director angles of tens of radians dwarf a correction), PETSc's
+    step test (stol = 1e-8) ends the first solve after one iteration with the residual far from
+    converged. The residual test goes on to rtol, and a solve that starts at the residual's
+    round-off floor ends there at once instead of running to max_it.
+    """
+    settings = SolverConfig(rtol=1e-12, atol=1e-14)
+    s = SNESSolver.from_config(*offset_problem(1e7), settings, prefix="toy_")
+    assert s.snes.getTolerances()[2] == 0.0
+    result = s.solve()
+    assert result.converged and result.iterations > 1
+    assert result.residual_norm <= max(1e-12 * s.norms[0], s.convergence.floor)
+    assert 0 < s.convergence.floor < 1e-4 * s.norms[0]  # eps |x| through J: round-off, not physics
+    s_floor = s.convergence.floor
+    again = s.solve()  # from the converged state: at the floor from the start
+    assert again.converged and again.iterations <= 2 and s.convergence.floor_ends >= 1
+    s.destroy()
+
+    user_options("toy_snes_convergence_test", "default")  # PETSc's own test, on the user's word
+    petsc = SNESSolver.from_config(*offset_problem(1e7), settings, prefix="toy_", snes_stol=1e-8)
+    first = petsc.solve()
+    assert first.reason_name == "CONVERGED_SNORM_RELATIVE" and first.iterations == 1
+    assert first.residual_norm > 10 * s_floor
+    petsc.destroy()
 
 
 def test_options_read_at_the_first_solve_reach_mumps(user_options):

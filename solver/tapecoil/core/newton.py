@@ -21,6 +21,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from tapecoil.core import compat
+from tapecoil.core.convergence import ResidualTest
 
 DEFAULT_PETSC_OPTIONS = {
     "snes_type": "newtonls",
@@ -67,11 +68,15 @@ class SNESSolver:
 
     ``prefix``: the PETSc options prefix, named by the caller (letters, digits and underscores,
     ending in an underscore). ``options`` override :data:`DEFAULT_PETSC_OPTIONS` (PETSc option
-    names without prefix); ``rtol``, ``atol`` and ``max_it`` set the SNES tolerances. Whatever
+    names without prefix); ``rtol``, ``atol`` and ``max_it`` set the SNES tolerances;
+    ``state_scale``: a Function of q's space, the magnitude of what q is added to (see
+    :class:`~tapecoil.core.convergence.ResidualTest`). Whatever
     the PETSc options database holds under the prefix (the command line) wins over all of these.
     """
 
-    def __init__(self, F, J, q, bcs, *, prefix, options=None, rtol=1e-8, atol=1e-10, max_it=25):
+    def __init__(
+        self, F, J, q, bcs, *, prefix, options=None, rtol=1e-8, atol=1e-10, max_it=25, state_scale=None
+    ):
         if not isinstance(prefix, str) or not _PREFIX.fullmatch(prefix):
             raise ValueError(
                 f"PETSc options prefix {prefix!r}: letters, digits and underscores, starting with a "
@@ -102,16 +107,24 @@ class SNESSolver:
         self.snes.setOptionsPrefix(prefix)
         self.snes.setFunction(self._residual, self.b)
         self.snes.setJacobian(self._jacobian, self.A)
-        # stol stays at PETSc's 1e-8: it is what ends the pseudo-transient relaxation's solves,
-        # whose residual starts near its round-off floor (1e-8 on the coarse coiling), below
-        # rtol times itself and below atol. With stol = 0 the coarse coiling stopped at its
-        # first snap (15.19 rad); its 60 solves ended by the step test all had residuals at
-        # that floor, so no solve ends on a small step with a large residual
-        self.snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
+        # no step-length test: the state holds director angles of tens of radians, against which
+        # a small Newton step says nothing about the residual (see core.convergence)
+        self.snes.setTolerances(rtol=rtol, atol=atol, stol=0.0, max_it=max_it)
+        # no divergence test either, unless asked for (-<prefix>snes_divergence_tolerance): full
+        # Newton steps on a thin shell raise the residual 1e4-fold in their first iteration and
+        # then converge in three more (the slit annular plate: with PETSc's 1e4 the first load
+        # step is cut back 8 times and the plate takes 416 steps instead of 37)
+        self.snes.setDivergenceTolerance(PETSc.UNLIMITED)
         self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
         with self._options_in_database():
             self.snes.setFromOptions()
             self.snes.getKSP().setFromOptions()
+            # the user's -<prefix>snes_convergence_test (PETSc's own tests) wins over ours
+            self.convergence = ResidualTest(
+                None if state_scale is None else state_scale.x.array[: self.x.getLocalSize()]
+            )
+            if not PETSc.Options().hasName(prefix + "snes_convergence_test"):
+                self.snes.setConvergenceTest(self.convergence)
         # a non-finite residual ends the solve as diverged instead of poisoning the state
         self.snes.setErrorIfNotConverged(False)
 
@@ -167,6 +180,7 @@ class SNESSolver:
         compat.assemble_matrix(A, self.J_form, self.bcs)
         widened = [term.add_jacobian(A) for term in self.terms]
         A.assemble()
+        self.convergence.update_floor(A, x)
         if any(widened):
             # a widened pattern replaces A's storage (PETSc's header merge), which the
             # factorisation does not notice: make it analyse the new pattern afresh
@@ -201,7 +215,20 @@ class SNESSolver:
         return {"assembly": assembly / its, "linear_solve": (self.timings["solve"] - assembly) / its}
 
     @classmethod
-    def from_config(cls, F, J, q, bcs, solver_config, *, prefix, defaults=None, options=None, **overrides):
+    def from_config(
+        cls,
+        F,
+        J,
+        q,
+        bcs,
+        solver_config,
+        *,
+        prefix,
+        defaults=None,
+        options=None,
+        state_scale=None,
+        **overrides,
+    ):
         """A solver with the tolerances and PETSc options of a :class:`SolverConfig`.
 
         ``prefix``: the PETSc options prefix (see the class). PETSc options, each level over the
@@ -221,6 +248,7 @@ class SNESSolver:
             rtol=solver_config.rtol,
             atol=solver_config.atol,
             max_it=solver_config.max_newton,
+            state_scale=state_scale,
         )
 
     def destroy(self) -> None:

@@ -308,6 +308,21 @@ class NaghdiShell:
         F, grad_d = self.F, ufl.grad(self.d)
         return tuple(-ufl.dot(F[:, i], grad_d[:, i]) / ufl.dot(F[:, i], F[:, i]) for i in (0, 1))
 
+    def rounding_scale(self):
+        """The magnitude of what each state component is added to, for the solver's round-off
+        floor: |phi0| for the displacement (the position phi0 + u rounds to eps |phi0 + u|),
+        1 for the director angles (the director's components, of size 1, round to eps)."""
+        import dolfinx
+
+        scale = dolfinx.fem.Function(self.W)
+        V, dofs = self.W.sub(0).collapse()
+        position = dolfinx.fem.Function(V)
+        position.interpolate(lambda x: np.abs(self.strip.geometry.phi0(x)))
+        scale.x.array[dofs] = position.x.array
+        _, angle_dofs = self.W.sub(1).collapse()
+        scale.x.array[angle_dofs] = 1.0
+        return scale
+
     def relaxation(self, length_scale: float):
         """Viscous term for pseudo-transient relaxation: (coefficient, previous state, form).
 

@@ -106,6 +106,7 @@ class CoilingModel:
             prefix="coil_",
             defaults={"pc_type": "cholesky"},
             options=config.coiling.petsc_options,
+            state_scale=model.rounding_scale(),
         )
         self.solver.terms += tape.contact_terms(model.q, bcs)
         self._reaction_form = None

@@ -109,6 +109,7 @@ class DeploymentModel:
             prefix="deploy_",
             defaults=options,
             options=cfg.deployment.petsc_options,
+            state_scale=model.rounding_scale(),
         )
         self.kinetic_form = dolfinx.fem.form(kinetic * model.jacobian * model.dx)
         self._internal_form = ufl.derivative(self.energy, model.q, model.dq)

@@ -184,6 +184,7 @@ def tape_fold(
         root.bcs + end.bcs,
         config.solver,
         prefix=solver_prefix("tape-fold"),
+        state_scale=model.rounding_scale(),
     )
     energy_form = dolfinx.fem.form(total_energy)
     path = []
