@@ -37,9 +37,11 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10 (conda environments)
     import tomli as tomllib
 
-# Facet tags of the strip's edges, and the cell tag of the strip.
+# Facet tags of a surface's edges, named by the parameter bound each lies on, and the cell tag.
 STRIP = 1
-ROOT, FREE_END, SIDE_NEG, SIDE_POS = 1, 2, 3, 4
+XI1_MIN, XI1_MAX, XI2_MIN, XI2_MAX = 1, 2, 3, 4
+# the same edges as a tape's: its root, its free end and its two long sides
+ROOT, FREE_END, SIDE_NEG, SIDE_POS = XI1_MIN, XI1_MAX, XI2_MIN, XI2_MAX
 
 # The preset mesh resolutions are kept in meshes/presets.toml at the top of the project, where
 # they are read and changed; this package reaches it through the link presets.toml beside this
@@ -152,11 +154,11 @@ def _build_parameter_rectangle(xi_range, res: MeshResolution) -> None:
     for _, tag in gmsh.model.getBoundary([(2, surface)], oriented=False):
         cx, cy, _ = gmsh.model.occ.getCenterOfMass(1, tag)
         if abs(cx - x0) < 1e-9 * (x1 - x0):
-            edges[ROOT] = tag
+            edges[XI1_MIN] = tag
         elif abs(cx - x1) < 1e-9 * (x1 - x0):
-            edges[FREE_END] = tag
+            edges[XI1_MAX] = tag
         else:
-            edges[SIDE_NEG if abs(cy - y0) < abs(cy - y1) else SIDE_POS] = tag
+            edges[XI2_MIN if abs(cy - y0) < abs(cy - y1) else XI2_MAX] = tag
     _tag_and_mesh(surface, edges, res, x_root=x0, x_end=x1)
 
 

@@ -45,8 +45,9 @@ class Surface:
     ranges otherwise (``xi_range``). A subclass writes the map once, in :meth:`map`, with the
     functions of ``ops`` (sin, cos, sqrt, exp, log); the numpy map, the UFL map of the shell's
     forms and the Jacobian (the complex-step derivative of the numpy map, exact to round-off)
-    all follow from it, so they cannot disagree. Edge tags: ROOT at xi_1 = min, FREE_END at
-    xi_1 = max, SIDE_NEG at xi_2 = min and SIDE_POS at xi_2 = max.
+    all follow from it, so they cannot disagree. Edge tags (:mod:`tapecoil.geometry.meshes`):
+    XI1_MIN, XI1_MAX, XI2_MIN and XI2_MAX, the parameter bound each edge lies on (a tape's
+    root, free end and sides).
     """
 
     xi_range: tuple[tuple[float, float], tuple[float, float]]

@@ -4,4 +4,12 @@ The case names live here, apart from the cases, so that the command line can off
 choices without loading DOLFINx: ``tapecoil theory`` and ``tapecoil config`` need none of it.
 """
 
-CASES = ("stress-free", "tape-linear", "rollup", "semicylinder", "slit-plate", "tape-fold")
+CASES = (
+    "stress-free",
+    "tape-linear",
+    "rollup",
+    "cantilever-shear",
+    "semicylinder",
+    "slit-plate",
+    "tape-fold",
+)

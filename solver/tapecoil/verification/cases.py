@@ -12,9 +12,11 @@ from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.verification import CASES
 from tapecoil.verification.checks import CaseResult
 from tapecoil.verification.sze import (
+    CANTILEVER_MESHES,
     ROLLUP_MESHES,
     SEMICYLINDER_MESHES,
     SLIT_PLATE_MESHES,
+    cantilever_shear,
     rollup,
     semicylinder,
     slit_plate,
@@ -45,6 +47,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = tape_linear(config, tape_res, comm=comm)
     elif name == "rollup":
         result = rollup(ROLLUP_MESHES[preset], comm=comm, solver_config=config.solver)
+    elif name == "cantilever-shear":
+        result = cantilever_shear(CANTILEVER_MESHES[preset], comm=comm, solver_config=config.solver)
     elif name == "semicylinder":
         result = semicylinder(SEMICYLINDER_MESHES[preset], comm=comm, solver_config=config.solver)
     elif name == "slit-plate":

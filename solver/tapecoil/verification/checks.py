@@ -1,5 +1,5 @@
 """What a verification case reports: its checks against references, and the helpers that
-measure a shell's state for them (energies, edge integrals and averages, load stepping)."""
+measure a shell's state for them (energies, edge integrals, region energy densities)."""
 
 from __future__ import annotations
 
@@ -11,9 +11,7 @@ import numpy as np
 import ufl
 
 from tapecoil.core.dofs import global_scalar
-from tapecoil.core.newton import SNESSolver
 from tapecoil.models.shell import NaghdiShell
-from tapecoil.verification.checks import *  # noqa: F403 (resolved below)
 
 
 @dataclass
@@ -82,26 +80,6 @@ def quadratic_energies(model: NaghdiShell) -> dict[str, float]:
         model.q.x.array[:] = direction.x.array
     out["total"] = out["membrane"] + out["bending"] + out["shear"]
     return out
-
-
-def edge_average(model: NaghdiShell, expr, tag: int, length: float) -> np.ndarray:
-    """Average of a vector expression over an edge of parameter length ``length`` (collective)."""
-    return np.array([edge_integral(model, expr[i], tag) / length for i in range(len(expr))])
-
-
-def solve_to_full_load(model, F, bcs, set_load, settings, prefix, steps, point_forces=()):
-    """Newton with adaptive load stepping from 0 to the full load; returns the step history.
-
-    ``settings``: the ``[solver]`` section; ``steps``: (first, largest) step as fractions of the load.
-    """
-    from tapecoil.core.stepping import Continuation
-
-    solver = SNESSolver.from_config(F, model.jacobian_form(F), model.q, bcs, settings, prefix=prefix)
-    control = settings.control(initial_step=steps[0], max_step=steps[1], min_step=1e-6)
-    solver.point_forces.extend(point_forces)
-    history = Continuation(solver.solve, set_load, model.q, control).run(0.0, 1.0)
-    solver.destroy()
-    return history
 
 
 def region_energy_density(model: NaghdiShell, V0, mask: np.ndarray) -> float:
