@@ -36,16 +36,43 @@ those terms are integrated exactly with low-order elements. ``technology`` selec
     verification table.
 docs/shell-technology.md records the measurements behind the choice (a Hellinger-Reissner
 variant with discontinuous resultants was tried and rejected: zero-energy modes).
+
+This module holds the material and the shell's state, kinematics and energy forms; beside it,
+:mod:`~tapecoil.models.director` (the director map and its frames), :mod:`~tapecoil.models.quadrature`
+(the measures and the PSRI split), :mod:`~tapecoil.models.secant` (the energy-consistent work
+over a step), :mod:`~tapecoil.models.nodes` (the numpy side: frames and angles at points,
+node-wise state views) and :mod:`~tapecoil.models.solver_terms` (relaxation, rounding scale).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
 import ufl
 
-TECHNOLOGIES = ("full", "psri")
+from tapecoil.models import nodes, secant, solver_terms
+from tapecoil.models.director import (
+    FRAMES,
+    angles_from_director,
+    director_from_angles,
+    director_secant,
+    reference_frame,
+)
+from tapecoil.models.nodes import Nodes
+from tapecoil.models.quadrature import TECHNOLOGIES, ShellQuadrature
+
+__all__ = [
+    "FRAMES",
+    "SHEAR_CORRECTION",
+    "TECHNOLOGIES",
+    "NaghdiShell",
+    "Nodes",
+    "ShellMaterial",
+    "angles_from_director",
+    "director_from_angles",
+    "director_secant",
+]
+
 SHEAR_CORRECTION = 5.0 / 6.0
 
 
@@ -61,54 +88,31 @@ class ShellMaterial:
     def shear_modulus(self) -> float:
         return self.E / (2 * (1 + self.nu))
 
+    def energy_densities(self, A, e, k, g):
+        """Membrane, bending and shear energy per unit reference area of the covariant strains
+        (e, k, g), with the contravariant metric A (the module docstring's energy)."""
+        E, nu, h = self.E, self.nu, self.h
+        return (
+            0.5 * h * ufl.inner(_plane_stress(e, A, E, nu), e),
+            h**3 / 24 * ufl.inner(_plane_stress(k, A, E, nu), k),
+            0.5 * SHEAR_CORRECTION * self.shear_modulus * h * ufl.dot(g, ufl.dot(A, g)),
+        )
+
+    def work_densities(self, A, strains, variations):
+        """Membrane, bending and shear virtual work per unit reference area of the resultants of
+        the strains (e, k, g) on the strain variations (de, dk, dg)."""
+        (e, k, g), (de, dk, dg) = strains, variations
+        E, nu, h = self.E, self.nu, self.h
+        return (
+            h * ufl.inner(_plane_stress(e, A, E, nu), de),
+            h**3 / 12 * ufl.inner(_plane_stress(k, A, E, nu), dk),
+            SHEAR_CORRECTION * self.shear_modulus * h * ufl.dot(ufl.dot(A, g), dg),
+        )
+
 
 def _plane_stress(S, A, E: float, nu: float):
     """Contravariant stress-like tensor C(S) of a covariant strain S, isotropic plane stress."""
     return E / (1 - nu**2) * ((1 - nu) * ufl.dot(ufl.dot(A, S), A) + nu * ufl.tr(ufl.dot(A, S)) * A)
-
-
-FRAMES = ("local", "global")
-
-
-def director_from_angles(theta, frame):
-    """Director d(theta) in the frame (e1, e2, e3), see the module docstring."""
-    t1, t2, n0 = frame
-    c0, s0 = ufl.cos(theta[0]), ufl.sin(theta[0])
-    return c0 * ufl.sin(theta[1]) * t1 - s0 * t2 + c0 * ufl.cos(theta[1]) * n0
-
-
-def angles_from_director(d: np.ndarray, frame: tuple[np.ndarray, ...], theta1_near: np.ndarray | float = 0.0):
-    """Angles (theta_0, theta_1) of unit directors d (3, n) in frames (3, n) each; numpy.
-
-    theta_1 is defined up to multiples of 2 pi: the branch nearest ``theta1_near`` is returned,
-    so that rotations through several turns stay continuous.
-    """
-    t1, t2, n0 = frame
-    dt1, dt2, dn = (np.einsum("in,in->n", d, v) for v in (t1, t2, n0))
-    theta0 = -np.arcsin(np.clip(dt2, -1.0, 1.0))
-    theta1 = np.arctan2(dt1, dn)
-    theta1 = theta1 + 2 * np.pi * np.round((theta1_near - theta1) / (2 * np.pi))
-    return np.vstack([theta0, theta1])
-
-
-def director_secant(theta0, theta1, frame):
-    """A 3 x 2 discrete derivative of the director map between the total angles theta0 and theta1.
-
-    Dd_bar (theta1 - theta0) = d(theta1) - d(theta0) holds exactly (Gonzalez's discrete
-    gradient, applied to each component of d): the derivative at the midpoint plus a correction
-    along the step, which is of second order in the step. Steps below 1e-12 rad take the
-    midpoint derivative alone.
-    """
-    mid = ufl.variable(0.5 * (theta0 + theta1))
-    derivative = ufl.diff(director_from_angles(mid, frame), mid)
-    step = theta1 - theta0
-    length2 = ufl.dot(step, step)
-    rest = (
-        director_from_angles(theta1, frame) - director_from_angles(theta0, frame) - ufl.dot(derivative, step)
-    )
-    eps = 1e-24
-    weight = ufl.conditional(ufl.gt(length2, eps), 1.0 / ufl.max_value(length2, eps), 0.0)
-    return derivative + weight * ufl.outer(rest, step)
 
 
 class NaghdiShell:
@@ -148,32 +152,14 @@ class NaghdiShell:
         self.q = dolfinx.fem.Function(self.W, name="state")
         self.dq = ufl.TestFunction(self.W)
 
-        # quadrature: 'full' integrates the polynomial part exactly on the affine parameter
-        # mesh; 'reduced' is one Gauss point fewer per direction
-        self.q_full = 2 * degree + 1
-        self.q_reduced = 2 * degree - 1
-        self.dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": self.q_full})
-        self.dx_reduced = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": self.q_reduced})
-        self.ds = ufl.Measure(
-            "ds", domain=mesh, subdomain_data=strip.facet_tags, metadata={"quadrature_degree": self.q_full}
-        )
-
         xi = ufl.SpatialCoordinate(mesh)
         self.xi = xi
         self.phi0 = strip.geometry.phi0_ufl(xi)
         J0 = ufl.grad(self.phi0)
         self.J0 = J0
         n0 = ufl.cross(J0[:, 0], J0[:, 1])
-        n0 = n0 / ufl.sqrt(ufl.dot(n0, n0))
-        t1 = J0[:, 0] / ufl.sqrt(ufl.dot(J0[:, 0], J0[:, 0]))
-        t2 = ufl.cross(n0, t1)
-        self.n0 = n0
-        if director_frame == "local":
-            self.frame = (t1, t2, n0)
-            self.theta_ref = ufl.as_vector([0.0, 0.0])
-        else:
-            self.frame = tuple(ufl.as_vector(e) for e in np.eye(3))
-            self.theta_ref = ufl.as_vector([-ufl.asin(n0[1]), ufl.atan2(n0[0], n0[2])])
+        self.n0 = n0 = n0 / ufl.sqrt(ufl.dot(n0, n0))
+        self.frame, self.theta_ref = reference_frame(J0, n0, director_frame)
         self.a0 = J0.T * J0
         self.A = ufl.inv(self.a0)
         self.jacobian = ufl.sqrt(ufl.det(self.a0))
@@ -184,29 +170,16 @@ class NaghdiShell:
         self.phi = self.phi0 + self.u
         F = ufl.grad(self.phi)
         self.F = F
-        self.membrane_strain, self.bending_strain, self.shear_strain = self._strains(F, self.d)
+        self.membrane_strain, self.bending_strain, self.shear_strain = self.strains(F, self.d)
 
-        E, nu, h = material.E, material.nu, material.h
-        G = material.shear_modulus
-        A, dA = self.A, self.jacobian
         e, k, g = self.membrane_strain, self.bending_strain, self.shear_strain
-        psi_m = 0.5 * h * ufl.inner(_plane_stress(e, A, E, nu), e)
-        psi_b = h**3 / 24 * ufl.inner(_plane_stress(k, A, E, nu), k)
-        psi_s = 0.5 * SHEAR_CORRECTION * G * h * ufl.dot(g, ufl.dot(A, g))
-
-        self._psi_m, self._psi_b, self._psi_s = psi_m, psi_b, psi_s
-        if technology == "full":
-            self._alpha = None
-        else:
-            # physical element size: reference cell [0, 1]^2 (or the unit triangle) times the
-            # area scale sqrt(det a0) of the map to 3D
-            area = abs(ufl.JacobianDeterminant(mesh)) * dA
-            if mesh.topology.cell_name() != "quadrilateral":
-                area = area / 2
-            self._alpha = ufl.min_value(h**2 / area, 1.0)
+        self._psi_m, self._psi_b, self._psi_s = material.energy_densities(self.A, e, k, g)
+        self.quadrature = quad = ShellQuadrature(strip, degree, technology, material.h, self.jacobian)
+        self.dx, self.dx_reduced, self.ds = quad.dx, quad.dx_reduced, quad.ds
+        self.q_full, self.q_reduced = quad.full, quad.reduced
         self.energy_membrane, self.energy_bending, self.energy_shear = self.energy_forms()
 
-    def _strains(self, F, d):
+    def strains(self, F, d):
         """Membrane, bending and shear strains of a deformation gradient F and director field d."""
         J0 = self.J0
         return (
@@ -220,79 +193,22 @@ class NaghdiShell:
         u, theta = ufl.as_vector([state[i] for i in range(3)]), ufl.as_vector([state[3], state[4]])
         return u, theta, self.J0 + ufl.grad(u), director_from_angles(self.theta_ref + theta, self.frame)
 
-    def director_variation(self, q_old):
-        """The virtual director Dd_bar dtheta of the step from ``q_old`` to q (see director_secant)."""
-        _, theta_old, _, _ = self.kinematics(q_old)
-        secant = director_secant(self.theta_ref + theta_old, self.theta_ref + self.theta, self.frame)
-        return ufl.dot(secant, ufl.split(self.dq)[1])
-
-    def energy_secant_forms(self, q_old):
-        """(membrane, bending, shear) internal virtual work, energy-consistent from q_old to q.
-
-        Each strain is at most quadratic in (F, d), so with the stresses of the mean strain and
-        the strain variations at the mean (F, d), and the director varied by its discrete
-        derivative, the work in the direction of the step, dq = q - q_old, is exactly the
-        change of each energy (Simo and Tarnow 1992; Gonzalez 1996):
-
-            sum(forms)(q - q_old) = E(q) - E(q_old).
-
-        The quadrature (PSRI split included) is that of :meth:`energy_forms`, so the identity
-        holds point by point.
-        """
-        _, _, F0, d0 = self.kinematics(q_old)
-        F1, d1 = self.F, self.d
-        strains = [0.5 * (a + b) for a, b in zip(self._strains(F0, d0), self._strains(F1, d1), strict=True)]
-        du = ufl.split(self.dq)[0]
-        dF, dd = ufl.grad(du), self.director_variation(q_old)
-        F, d, grad_d = 0.5 * (F0 + F1), 0.5 * (d0 + d1), 0.5 * (ufl.grad(d0) + ufl.grad(d1))
-        de = ufl.sym(F.T * dF)
-        dk = ufl.sym(F.T * ufl.grad(dd) + dF.T * grad_d)
-        dg = F.T * dd + dF.T * d
-        m = self.material
-        A, E, nu, h = self.A, m.E, m.nu, m.h
-        membrane = h * ufl.inner(_plane_stress(strains[0], A, E, nu), de)
-        bending = h**3 / 12 * ufl.inner(_plane_stress(strains[1], A, E, nu), dk)
-        shear = SHEAR_CORRECTION * m.shear_modulus * h * ufl.dot(ufl.dot(A, strains[2]), dg)
-        return self._integrate(membrane, bending, shear)
-
     def energy_forms(self, weight=1.0):
         """(membrane, bending, shear) energy forms, each integrand times ``weight``.
 
         Exactly the quadrature rules of the solve (PSRI split included), so that a weighted
         energy (a region's, say) is part of the energy that is minimised.
         """
-        return self._integrate(weight * self._psi_m, weight * self._psi_b, weight * self._psi_s)
+        return self.quadrature.integrate(weight * self._psi_m, weight * self._psi_b, weight * self._psi_s)
 
-    def _integrate(self, membrane, bending, shear):
-        """Membrane, bending and shear densities as forms with the solve's quadrature (PSRI split)."""
-        dA = self.jacobian
-        if self._alpha is None:
-            return membrane * dA * self.dx, bending * dA * self.dx, shear * dA * self.dx
-        a = self._alpha
-
-        def split(density):
-            return a * density * dA * self.dx + (1 - a) * density * dA * self.dx_reduced
-
-        return split(membrane), bending * dA * self.dx, split(shear)
-
-    # -- state access --------------------------------------------------------------------
-    def director_frame_numpy(self, xi: np.ndarray):
-        """The director frame (e1, e2, e3) and reference angles (2, n) at parameter points."""
-        local = self.strip.geometry.frame(xi)
-        if self.director_frame == "local":
-            return local, np.zeros((2, xi.shape[1]))
-        n = xi.shape[1]
-        frame = tuple(np.tile(e[:, None], n) for e in np.eye(3))
-        n0 = local[2]
-        return frame, np.vstack([-np.arcsin(np.clip(n0[1], -1, 1)), np.arctan2(n0[0], n0[2])])
-
-    def angles_of(self, d: np.ndarray, xi: np.ndarray, rotation_near: float = 0.0) -> np.ndarray:
-        """Unknown angles theta (2, n) that give the directors d (3, n) at parameter points xi.
-
-        The unbounded theta_1 is taken on the branch nearest ``rotation_near`` [rad].
-        """
-        frame, ref = self.director_frame_numpy(xi)
-        return angles_from_director(d, frame, theta1_near=ref[1] + rotation_near) - ref
+    # the step's secant forms, the numpy side and the solvers' terms are their modules' jobs;
+    # bound here because code holding a shell calls them as its methods
+    director_variation = secant.director_variation
+    energy_secant_forms = secant.energy_secant_forms
+    director_frame_numpy = nodes.director_frame_numpy
+    angles_of = nodes.angles_of
+    rounding_scale = solver_terms.rounding_scale
+    relaxation = solver_terms.relaxation
 
     @property
     def display_offset(self):
@@ -308,41 +224,6 @@ class NaghdiShell:
         F, grad_d = self.F, ufl.grad(self.d)
         return tuple(-ufl.dot(F[:, i], grad_d[:, i]) / ufl.dot(F[:, i], F[:, i]) for i in (0, 1))
 
-    def rounding_scale(self):
-        """The magnitude of what each state component is added to, for the solver's round-off
-        floor: |phi0| for the displacement (the position phi0 + u rounds to eps |phi0 + u|),
-        1 for the director angles (the director's components, of size 1, round to eps)."""
-        import dolfinx
-
-        scale = dolfinx.fem.Function(self.W)
-        V, dofs = self.W.sub(0).collapse()
-        position = dolfinx.fem.Function(V)
-        position.interpolate(lambda x: np.abs(self.strip.geometry.phi0(x)))
-        scale.x.array[dofs] = position.x.array
-        _, angle_dofs = self.W.sub(1).collapse()
-        scale.x.array[angle_dofs] = 1.0
-        return scale
-
-    def relaxation(self, length_scale: float):
-        """Viscous term for pseudo-transient relaxation: (coefficient, previous state, form).
-
-        coefficient * [(u - u_prev).du + length_scale^2 (theta - theta_prev).dtheta] over the
-        reference area; with the coefficient 0 it vanishes.
-        """
-        import dolfinx
-
-        coefficient = dolfinx.fem.Constant(self.mesh, 0.0)
-        previous = dolfinx.fem.Function(self.W)
-        prev = ufl.split(previous)
-        du, dtheta = ufl.split(self.dq)[0], ufl.split(self.dq)[1]
-        form = (
-            coefficient
-            * (ufl.dot(self.u - prev[0], du) + length_scale**2 * ufl.dot(self.theta - prev[1], dtheta))
-            * self.jacobian
-            * self.dx
-        )
-        return coefficient, previous, form
-
     @property
     def strain_energy(self):
         """Total strain energy form, evaluated with the quadrature the solve uses."""
@@ -355,42 +236,3 @@ class NaghdiShell:
 
     def jacobian_form(self, residual):
         return ufl.derivative(residual, self.q, ufl.TrialFunction(self.W))
-
-
-class Nodes:
-    """Node-wise numpy views of a shell state: positions, directors and the W-dofs behind them.
-
-    All components of u and theta live on the same Q2 nodes; ``space`` is the scalar Q2 space on
-    those nodes (local and ghost, in its own order) and ``u_dofs`` (n, 3), ``theta_dofs`` (n, 2)
-    give the W-dof of each component at each node. Computations on these arrays are rank-local and,
-    done on ghosts as on owners from the same values, give every rank the same values.
-    """
-
-    def __init__(self, model: NaghdiShell):
-        from tapecoil.core import compat
-
-        W = model.W
-        spaces_maps = [compat.collapse(W.sub(0).sub(i)) for i in range(3)]
-        spaces_maps += [compat.collapse(W.sub(1).sub(i)) for i in range(2)]
-        self.space = spaces_maps[0][0]
-        xi = self.space.tabulate_dof_coordinates()
-        for space, _ in spaces_maps[1:]:  # the same node order in every collapsed component
-            if not np.array_equal(space.tabulate_dof_coordinates(), xi):
-                raise RuntimeError("collapsed shell components do not share their node order")
-        self.u_dofs = np.column_stack([m for _, m in spaces_maps[:3]])
-        self.theta_dofs = np.column_stack([m for _, m in spaces_maps[3:]])
-        if self.u_dofs.shape != (xi.shape[0], 3) or self.theta_dofs.shape != (xi.shape[0], 2):
-            raise RuntimeError(f"unexpected collapsed dof maps {self.u_dofs.shape}, {self.theta_dofs.shape}")
-        self.xi = xi[:, :2].T.copy()
-        self.reference = model.strip.geometry.phi0(self.xi)
-        self.frame, self.theta_ref = model.director_frame_numpy(self.xi)
-
-    def positions(self, q: np.ndarray) -> np.ndarray:
-        """Mid-surface positions (3, n) for the W-dof array ``q``."""
-        return self.reference + q[self.u_dofs].T
-
-    def directors(self, q: np.ndarray) -> np.ndarray:
-        """Unit directors (3, n) for the W-dof array ``q``."""
-        t0, t1 = self.theta_ref + q[self.theta_dofs].T
-        e1, e2, e3 = self.frame
-        return np.cos(t0) * np.sin(t1) * e1 - np.sin(t0) * e2 + np.cos(t0) * np.cos(t1) * e3

@@ -4,7 +4,8 @@ What every phase of a tape spring's life on a hub shares, and nothing a single p
 coiling adds the guide, the pull, its solver and predictor; the deployment the inertia, the
 release and its time stepping. A checkpoint of any phase holds this state (the shell's state and
 the winding angles), so a phase starts from another's checkpoint by reading this alone, without
-building the other phase's forms or solver.
+building the other phase's forms or solver. The turns' contact with each other is
+:mod:`~tapecoil.phases.turn_contact`'s, the centre-line measures :mod:`~tapecoil.phases.centre_line`'s.
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
-from tapecoil.contact.self_contact import PairsAtState, SelfContact, SelfContactTerm
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
@@ -29,6 +29,8 @@ from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact, default_penalty
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, ShellMaterial
+from tapecoil.phases import centre_line as centre
+from tapecoil.phases.turn_contact import TurnContact
 
 
 def check_penetration(penetration: float, config, load: float, where: str) -> None:
@@ -79,23 +81,12 @@ class TapeOnHub:
         smoothing = cc.smoothing * tp.h
         self.contact = CoilContact(model, self.frame, self.penalty, max_turns, ramp, smoothing, cc.turns)
         self.contact.reset()
-        self.self_contact = self.search = None
+        self.turns = None
         if cc.turns == "surface":
-            # the turns against each other: any part of the mid-surface against any other more
-            # than a few search reaches away along the tape (its own neighbourhood)
             buffer = cc.search_margin * tp.h
-            self.self_contact = SelfContact(
-                model,
-                self.contact.nodes,
-                tp.h,
-                self.penalty,
-                smoothing,
-                buffer,
-                exclusion=4 * (tp.h + buffer),
-                side_hint=self._coil_side,
+            self.turns = TurnContact(
+                model, self.contact.nodes, self.frame, tp.h, self.penalty, smoothing, buffer
             )
-            self.search = self.self_contact.new_search()
-            self._measured = PairsAtState(self.self_contact)
         # strain + contact energy as forms (the turns' real contact is assembled on its own:
         # add_self_contact_force)
         self.energy = model.strain_energy + self.contact.energy
@@ -109,18 +100,6 @@ class TapeOnHub:
             parts.append(("contact_coil", self.contact.energy_coil))
         self.forms = {name: dolfinx.fem.form(form) for name, form in parts}
 
-    def _coil_side(self, node: np.ndarray, cell: np.ndarray) -> np.ndarray:
-        """The side (+1, -1 along the surface's orientation) of cells their nodes lie on in a coil.
-
-        Material wound later lies outside: a node farther along the tape than the cell is on
-        the cell's outer side. The surface's orientation (xi_1 x xi_2, +z on the flat strip)
-        points away from the hub in opposite-sense coiling and towards it in equal-sense, and a
-        coil keeps it.
-        """
-        sc = self.self_contact
-        outside = sc.material[node, 0] > sc.material[sc.cells[cell], 0].mean(axis=1)
-        return self.frame.sign * np.where(outside, 1.0, -1.0)
-
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
         facets = self.strip.facet_tags.find(tag)
@@ -128,81 +107,37 @@ class TapeOnHub:
 
     def energies(self) -> dict[str, float]:
         out = {name: global_scalar(form, self.model.mesh.comm) for name, form in self.forms.items()}
-        if self.self_contact is not None:
-            out["contact_coil"] = self.self_contact.energy(self._self_contact_pairs())
+        if self.turns is not None:
+            out["contact_coil"] = self.turns.energy()
         out["strain"] = out["membrane"] + out["bending"] + out["shear"]
         out["contact"] = out["contact_hub"] + out["contact_coil"]
         return out
 
-    def centre_nodes(self) -> np.ndarray:
-        """Mask of this rank's owned nodes on the centre line (the line of xi_2 nearest 0; collective)."""
-        nodes = self.contact.nodes
-        distance = np.abs(nodes.xi[1, : nodes.space.dofmap.index_map.size_local])
-        local_min = distance.min() if distance.size else np.inf
-        return distance <= self.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * self.config.tape.b
-
-    def centre_line(self) -> dict[str, np.ndarray]:
-        """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
-
-        Columns: xi_1, winding angle psi, mid-surface distance from the hub axis.
-        """
-        nodes = self.contact.nodes
-        n_owned = nodes.space.dofmap.index_map.size_local
-        xi = nodes.xi[:, :n_owned]
-        mask = self.centre_nodes()
-        radius, _ = self.contact.polar(nodes.positions(self.model.q.x.array)[:, :n_owned])
-        local = np.column_stack([xi[0][mask], self.contact.psi.x.array[:n_owned][mask], radius[mask]])
-        rows = np.vstack(self.comm.allgather(local))
-        rows = rows[np.argsort(rows[:, 0])]
-        return {"xi1": rows[:, 0], "psi": rows[:, 1], "radius": rows[:, 2]}
-
-    def coil_geometry(self, angle: float) -> dict[str, float]:
-        """Coiled length and outer coil radius [m] (collective).
-
-        The coiled length is the material length behind the tangent point, where the centre
-        line's winding angle equals the hub angle. The outer radius is that of the outer face of
-        the last turn half a turn behind the tangent point (mid-surface distance + h/2): at the
-        tangent point itself the tape is already lifting off into the ploy region.
-        """
-        line = self.centre_line()
-        psi, xi1, radius = line["psi"], line["xi1"], line["radius"]
-        h = self.config.tape.h
-        if angle <= psi[0]:
-            return {"coiled_length": 0.0, "outer_radius": float(radius[0] + h / 2)}
-        s = float(np.interp(angle, psi, xi1))
-        probe = angle - math.pi if angle > math.pi else angle
-        r = float(np.interp(probe, psi, radius))
-        return {"coiled_length": s, "outer_radius": r + 0.5 * h}
+    # the phases and the measures read the centre line as the tape's
+    centre_nodes = centre.centre_nodes
+    centre_line = centre.centre_line
+    coil_geometry = centre.coil_geometry
 
     def max_penetration(self) -> float:
         """Largest penetration into the hub or of the tape into itself [m] (>= 0, collective)."""
         local = self.contact.nodal_penetration()
         hub = max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
-        if self.self_contact is None:
-            return hub
-        return max(hub, self.self_contact.max_penetration(self._self_contact_pairs()))
+        return hub if self.turns is None else max(hub, self.turns.max_penetration())
 
     def add_self_contact_force(self, force: dolfinx.fem.Function) -> None:
         """Add the force of the turns' real contact dE/dq at the current state to ``force``
         (collective; nothing with the spiral obstacle, whose force is in ``energy``)."""
-        if self.self_contact is not None:
-            self.self_contact.add_force(force, self._self_contact_pairs())
-
-    def _self_contact_pairs(self):
-        """The turns' contact pairs at the current state, once per state for all the measures."""
-        q = self.model.q.x.array
-        return self._measured.get(q, lambda: self.self_contact.pairs(q, self.search))
+        if self.turns is not None:
+            self.turns.add_force(force)
 
     def accept_state(self) -> None:
         """After a converged step: the turns' real contact reads its sides from this state."""
-        if self.self_contact is not None:
-            self.self_contact.accept(self.model.q.x.array)
+        if self.turns is not None:
+            self.turns.accept()
 
     def contact_terms(self, q, bcs, weight: float = 1.0, previous=None) -> list:
-        """The solver terms of the turns' real contact (:class:`SelfContactTerm`), if any."""
-        if self.self_contact is None:
-            return []
-        return [SelfContactTerm(self.self_contact, q, bcs, weight, previous)]
+        """The solver terms of the turns' real contact (:meth:`TurnContact.term`), if any."""
+        return [] if self.turns is None else [self.turns.term(q, bcs, weight, previous)]
 
     # -- checkpoint -------------------------------------------------------------------------
     def checkpoint_functions(self) -> dict:

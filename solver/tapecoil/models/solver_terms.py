@@ -1,0 +1,54 @@
+"""What the solvers take from a shell besides its energy: relaxation and the state's rounding.
+
+The viscous term of pseudo-transient relaxation (:class:`tapecoil.core.stepping.Relaxation`
+drives its coefficient) and the magnitudes behind the round-off floor of the convergence test
+(:mod:`tapecoil.core.convergence`). Both take the shell first and are also its methods
+(``model.relaxation(h_e)``, ``model.rounding_scale()``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import ufl
+
+if TYPE_CHECKING:
+    from tapecoil.models.shell import NaghdiShell
+
+
+def rounding_scale(shell: NaghdiShell):
+    """The magnitude of what each state component is added to, for the solver's round-off
+    floor: |phi0| for the displacement (the position phi0 + u rounds to eps |phi0 + u|),
+    1 for the director angles (the director's components, of size 1, round to eps)."""
+    import dolfinx
+
+    scale = dolfinx.fem.Function(shell.W)
+    V, dofs = shell.W.sub(0).collapse()
+    position = dolfinx.fem.Function(V)
+    position.interpolate(lambda x: np.abs(shell.strip.geometry.phi0(x)))
+    scale.x.array[dofs] = position.x.array
+    _, angle_dofs = shell.W.sub(1).collapse()
+    scale.x.array[angle_dofs] = 1.0
+    return scale
+
+
+def relaxation(shell: NaghdiShell, length_scale: float):
+    """Viscous term for pseudo-transient relaxation: (coefficient, previous state, form).
+
+    coefficient * [(u - u_prev).du + length_scale^2 (theta - theta_prev).dtheta] over the
+    reference area; with the coefficient 0 it vanishes.
+    """
+    import dolfinx
+
+    coefficient = dolfinx.fem.Constant(shell.mesh, 0.0)
+    previous = dolfinx.fem.Function(shell.W)
+    prev = ufl.split(previous)
+    du, dtheta = ufl.split(shell.dq)[0], ufl.split(shell.dq)[1]
+    form = (
+        coefficient
+        * (ufl.dot(shell.u - prev[0], du) + length_scale**2 * ufl.dot(shell.theta - prev[1], dtheta))
+        * shell.jacobian
+        * shell.dx
+    )
+    return coefficient, previous, form
