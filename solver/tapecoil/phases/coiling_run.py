@@ -2,8 +2,9 @@
 
 :class:`CoilingRun` steps the loads of a :class:`~tapecoil.phases.coiling.CoilingModel`
 (flattening, then hub rotation with cut-back and relaxation through snaps) and records what each
-converged step measured; :class:`CoilingPhase` is the run as a phase of the one runner
-(:mod:`tapecoil.phases.runner`), and :func:`run_coiling` runs it into a results directory.
+converged step measured (:mod:`tapecoil.phases.coiling_rows`); :class:`CoilingPhase` is the run
+as a phase of the one runner (:mod:`tapecoil.phases.runner`), and :func:`run_coiling` runs it
+into a results directory.
 """
 
 from __future__ import annotations
@@ -19,10 +20,12 @@ from mpi4py import MPI
 
 from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
-from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation, StepRecord
+from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation
 from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_measure, ploy_measure
 from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
+from tapecoil.phases.coiling_rows import CoilingRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
+from tapecoil.phases.stepped import SteppedRun
 from tapecoil.phases.tape_on_hub import check_penetration
 
 
@@ -36,10 +39,11 @@ class CoilingResult:
     message: str = ""
 
 
-class CoilingRun:
+class CoilingRun(SteppedRun):
     """Flatten then coil to the target hub angle, recording a history row per converged step.
 
-    ``on_step(row)`` is called (on every rank) after each converged step, e.g. for output.
+    ``on_step(row)`` is called (on every rank) after each converged step, e.g. for output, with
+    its row (:class:`~tapecoil.phases.coiling_rows.CoilingRows`).
     """
 
     # the step grows after steps that converge in at most this many Newton iterations
@@ -51,82 +55,27 @@ class CoilingRun:
     max_steps: ClassVar[dict[str, float]] = {"shift": 1.0, "secant": 0.3}
 
     def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None, stop=None):
+        super().__init__(CoilingResult(), on_step, stop)
         self.m = model
         self.max_step = max_step or model.config.coiling.max_step or self.max_steps[model.predictor]
-        self.on_step = on_step
-        self.stop = stop  # StopSignals: checked after every converged coiling step
-        self.result = CoilingResult()
+        self.rows = CoilingRows(model)
         self.next_step = None  # the step the load stepping tries next (for a restart)
-        self._last_potential = None
-        self._t0 = time.perf_counter()
 
     def restart_state(self) -> dict:
         """What, besides the model's state, the stepping needs to go on as if never stopped."""
         previous = self.m.predictions.previous_converged()
         return {
             "next_step": self.next_step,
-            "last_potential": self._last_potential,
+            "last_potential": self.rows.last_potential,
             "previous_angle": None if previous is None else previous[0],
-            "history": self.result.history,
-            "wall_time_before": self.result.history[-1]["wall_time"] if self.result.history else 0.0,
+            **self._history_state(),
         }
 
     def restore(self, state: dict) -> None:
         """Continue from :meth:`restart_state` (the model restored from the same checkpoint)."""
         self.next_step = state["next_step"]
-        self._last_potential = state["last_potential"]
-        self.result.history = list(state["history"])
-        self._t0 -= state["wall_time_before"]
-
-    def _row(self, phase: str, load: float, step: StepRecord) -> dict:
-        m = self.m
-        angle = m.root.angle
-        e = m.tape.energies()
-        slide = m.end_slide()
-        geometry = m.tape.coil_geometry(angle)
-        internal = m.internal_force()  # one assembly for the end forces and the hub torque
-        forces = m.edge_forces(internal)
-        tension, root_tension = forces["tension"], forces["root_tension"]
-        # hub torque from the energy balance of the step: work of the hub = change of stored
-        # energy + work against the pull (secant over the step). The applied pull, not the
-        # measured one: its small noise times the whole slide would swamp a short step
-        pull = float(m.tension.value)
-        potential = e["strain"] + e["contact"] - pull * slide
-        # undefined (an empty cell) for the first step and across a snap passed by relaxation,
-        # where stored energy is released without work of the hub
-        torque = ""
-        if phase == "coil" and self._last_potential is not None and step.step > 0 and not step.relaxed:
-            torque = (potential - self._last_potential) / step.step
-        self._last_potential = potential
-        row = {
-            "phase": phase,
-            "load": load,
-            "hub_angle": angle,
-            "step": step.step,
-            "newton_iterations": step.iterations,
-            "cutbacks": step.cutbacks,
-            "relaxed": int(step.relaxed),
-            "hub_torque": torque,
-            "hub_torque_reaction": m.hub_torque(internal) if phase == "coil" else "",
-            "tension": tension,
-            "root_tension": root_tension,
-            "coiling_tension": tension - root_tension,
-            "end_slide": slide,
-            "membrane_energy": e["membrane"],
-            "bending_energy": e["bending"],
-            "shear_energy": e["shear"],
-            "strain_energy": e["strain"],
-            "contact_energy_hub": e["contact_hub"],
-            "contact_energy_coil": e["contact_coil"],
-            "max_penetration": m.tape.max_penetration(),
-            "coiled_length": geometry["coiled_length"],
-            "outer_radius": geometry["outer_radius"],
-            "wall_time": time.perf_counter() - self._t0,
-        }
-        self.result.history.append(row)
-        if self.on_step is not None:
-            self.on_step(row)
-        return row
+        self.rows.last_potential = state["last_potential"]
+        self._restore_history(state)
 
     def _continuation(self, set_load, control, predict=None):
         m = self.m
@@ -148,7 +97,7 @@ class CoilingRun:
         steps = m.config.coiling.flatten_steps
         control = m.config.solver.control(initial_step=1.0 / steps, max_step=1.0 / steps, min_step=1e-6)
         cont = self._continuation(m.set_flattening, control)
-        cont.on_step = lambda step: self._row("flatten", step.load, step)
+        cont.on_step = lambda step: self._record(self.rows.row("flatten", step.load, step))
         cont.run(0.0, 1.0)
 
     def coil(
@@ -177,10 +126,9 @@ class CoilingRun:
         def converged(step):
             m.update(step.load)
             self.next_step = step.next_step
-            row = self._row("coil", step.load, step)
+            row = self._record(self.rows.row("coil", step.load, step))
             check_penetration(row["max_penetration"], m.config, step.load, f"hub angle {step.load:.6g} rad")
-            if self.stop is not None:
-                self.stop.check(m.comm)
+            self._check_stop(m.comm)
 
         m.update(start_angle)
         cont = self._continuation(m.set_hub_angle, control, predict=m.predict)

@@ -6,11 +6,8 @@ coil-on-coil contact are kept. The stored strain energy drives the free part rou
 peeling the tape off the coil (Seffen and Pellegrino's picture: a straight part tangent to the
 coil, which shrinks).
 
-Inertia is the shell's consistent one. With the director d(theta), the kinetic energy per unit
-reference area is rho h |u'|^2 / 2 + rho h^3 / 24 |d'|^2; its Euler-Lagrange term in the
-direction (du, dtheta) is rho h u''.du + rho h^3/12 d''.(Dd dtheta), with
-d'' = Dd theta'' + D^2d[theta', theta'] (the centripetal part of the rotary inertia). Both are
-written with UFL's automatic differentiation of d(theta). Time stepping is generalized-alpha
+Inertia is the shell's consistent one, translational and rotary
+(:mod:`tapecoil.phases.deployment_forms`). Time stepping is generalized-alpha
 (:mod:`tapecoil.core.timeint`) with adaptive steps and the cut-back logic of the load stepping
 (:class:`tapecoil.core.stepping.Continuation`).
 
@@ -25,35 +22,20 @@ from pathlib import Path
 import dolfinx
 import dolfinx.fem.petsc
 import numpy as np
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from tapecoil.config import Config
-from tapecoil.core import checkpoint, compat
+from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
 from tapecoil.measures.deployment import lift_off
-from tapecoil.models.shell import director_from_angles
-from tapecoil.phases.release import EndHold, split_state
+from tapecoil.phases.deployment_forms import DeploymentForms, director_rates  # noqa: F401 - re-exported
+from tapecoil.phases.release import EndHold
 from tapecoil.phases.tape_on_hub import TapeOnHub
-
-
-def director_rates(model, theta, theta_dot, theta_ddot=None):
-    """Dd(theta) (3 x 2), d' = Dd theta' and, with theta'', d'' = Dd theta'' + D^2d[theta', theta']."""
-    t = ufl.variable(theta)
-    d = director_from_angles(model.theta_ref + t, model.frame)
-    Dd = ufl.diff(d, t)
-    d_dot = ufl.dot(Dd, theta_dot)
-    if theta_ddot is None:
-        return Dd, d_dot, None
-    D2d = ufl.diff(Dd, t)
-    i, j, k = ufl.indices(3)
-    centripetal = ufl.as_vector(D2d[i, j, k] * theta_dot[j] * theta_dot[k], i)
-    return Dd, d_dot, ufl.dot(Dd, theta_ddot) + centripetal
 
 
 class DeploymentModel:
@@ -83,10 +65,7 @@ class DeploymentModel:
         self.rho_inf = cfg.deployment.rho_inf if rho_inf is None else rho_inf
         self.integrator = ti = GeneralizedAlpha(model.q, self.rho_inf)
 
-        rho, h = tp.density, tp.h
-        self.translational = rho * h  # kg/m^2
-        self.rotary = rho * h**3 / 12  # kg
-        self.energy = model.strain_energy + c.contact.energy
+        self.forms = forms = DeploymentForms(model, ti, c.contact, tp)
 
         # the hold on the free end (the guide and the pull of the coiling run), let go over
         # release_time (phases.release)
@@ -95,10 +74,10 @@ class DeploymentModel:
 
         self.scheme = "conserving" if self.rho_inf == 1.0 else "alpha"
         if self.scheme == "alpha":
-            F, J, kinetic = self._alpha_forms(hold)
+            F, J, kinetic = forms.alpha(hold)
             options = {"pc_type": "cholesky"}
         else:
-            F, J, kinetic = self._conserving_forms(hold)
+            F, J, kinetic = forms.conserving(hold)
             options = {}
         self.solver = SNESSolver.from_config(
             F,
@@ -112,7 +91,6 @@ class DeploymentModel:
             state_scale=model.rounding_scale(),
         )
         self.kinetic_form = dolfinx.fem.form(kinetic * model.jacobian * model.dx)
-        self._internal_form = ufl.derivative(self.energy, model.q, model.dq)
         self.solver.point_forces.append(self.hold.point_force())
         # the turns' contact force at the level of the other internal forces: generalized-alpha's
         # average, and for rho_inf = 1 the trapezoidal mean of the two states (not a discrete
@@ -122,82 +100,6 @@ class DeploymentModel:
         self.solver.terms += c.contact_terms(model.q, self.bcs, 1.0 - alpha_f, (alpha_f, ti.q_old))
         self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
 
-    def _alpha_forms(self, hold):
-        """Residual, Jacobian and kinetic energy density of generalized-alpha (rho_inf < 1).
-
-        The equation of motion at the generalized-alpha levels, internal forces averaged between
-        the two states (:meth:`GeneralizedAlpha.force_average`).
-        """
-        model, ti = self.model, self.integrator
-        dA = model.jacobian
-        du, dtheta = split_state(model.dq)
-        a_u, a_theta = split_state(ti.a_m)
-        _, v_theta = split_state(ti.v_f)
-        _, theta_f = split_state(ti.q_f)
-        Dd_f, _, d_ddot = director_rates(model, theta_f, v_theta, a_theta)
-        translational = self.translational * ufl.dot(a_u, du) * dA * model.dx
-        rotary = self.rotary * ufl.dot(d_ddot, ufl.dot(Dd_f, dtheta)) * dA * model.dx
-        internal = ufl.derivative(self.energy, model.q, model.dq)
-        F = translational + rotary + ti.force_average(internal) + hold
-
-        # The Jacobian is exact but for the rotary inertia, linearised as its mass term alone
-        # (rho h^3/12 Dd^T Dd (1 - alpha_m)/(beta dt^2)): its other parts (the turning of Dd,
-        # the centripetal term) are not symmetric and 10^-8 of the translational mass. The
-        # rest is symmetric (force averaging, penalty contact, the hold's spring), so MUMPS
-        # factorises with LDL^T; the residual, and with it the solution, is exact.
-        trial = ufl.TrialFunction(model.W)
-        p = ti.parameters
-        _, dtheta_trial = split_state(trial)
-        rotary_mass = (1 - p.alpha_m) / (p.beta * ti.dt**2) * self.rotary
-        rotary_mass = (
-            rotary_mass * ufl.dot(ufl.dot(Dd_f, dtheta_trial), ufl.dot(Dd_f, dtheta)) * dA * model.dx
-        )
-        J = ufl.derivative(F - rotary, model.q, trial) + rotary_mass
-
-        # kinetic energy of the current state (velocity: the integrator's latest)
-        v_u, v_theta = split_state(ti.v_old)
-        _, d_dot, _ = director_rates(model, model.theta, v_theta)
-        kinetic = 0.5 * (self.translational * ufl.dot(v_u, v_u) + self.rotary * ufl.dot(d_dot, d_dot))
-        return F, J, kinetic
-
-    def _conserving_forms(self, hold):
-        """Residual, Jacobian and kinetic energy density of the energy-conserving trapezoidal rule.
-
-        rho_inf = 1: the trapezoidal (average acceleration) Newmark rule, with every force that
-        derives from an energy written as its discrete gradient between the two states (the
-        shell's and the contact's energy_secant_form), and the rotary inertia written for the
-        director velocity, kept at the quadrature points: d'_{n+1} = 2 (d_{n+1} - d_n)/dt - d'_n
-        and rho h^3/12 (d'_{n+1} - d'_n)/dt . dd, with dd the director's discrete variation.
-        Tested with the step itself, every term is an exact difference (kinetic energies
-        included), so strain + contact + kinetic energy changes only by the work of the hold:
-        the scheme neither dissipates nor creates energy (Simo and Tarnow 1992; Gonzalez 1996),
-        which the plain trapezoidal rule does not guarantee for nonlinear shells.
-        """
-        import basix.ufl
-
-        model, ti, mesh = self.model, self.integrator, self.model.mesh
-        element = basix.ufl.quadrature_element(mesh.basix_cell(), value_shape=(3,), degree=model.q_full)
-        space = dolfinx.fem.functionspace(mesh, element)
-        self.director_rate = dolfinx.fem.Function(space, name="director_rate")
-        _, _, _, d_old = model.kinematics(ti.q_old)
-        dd = model.director_variation(ti.q_old)
-        rate = 2 * (model.d - d_old) / ti.dt - self.director_rate
-        self._new_director_rate = dolfinx.fem.Expression(rate, compat.interpolation_points(space))
-        du, _ = split_state(model.dq)
-        a_u, _ = split_state(ti.a_m)
-        inertia = self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(
-            (rate - self.director_rate) / ti.dt, dd
-        )
-        internal = sum(model.energy_secant_forms(ti.q_old)) + self.contact.energy_secant_form(ti.q_old, dd)
-        F = inertia * model.jacobian * model.dx + internal + hold
-        J = ufl.derivative(F, model.q, ufl.TrialFunction(model.W))
-        v_u, _ = split_state(ti.v_old)
-        kinetic = 0.5 * (
-            self.translational * ufl.dot(v_u, v_u)
-            + self.rotary * ufl.dot(self.director_rate, self.director_rate)
-        )
-        return F, J, kinetic
-
     def restore(self, path: str | Path) -> None:
         """Velocity, acceleration, the stowed state and the director velocity from a checkpoint
         written by :func:`write_deployment_checkpoint` (the state itself is already in place)."""
@@ -205,7 +107,7 @@ class DeploymentModel:
         parts = {}
         for prefix in ("velocity_", "acceleration_", "stowed_"):
             parts.update(checkpoint.empty_state_parts(W, prefix))
-        extra = {"director_rate": self.director_rate} if self.scheme == "conserving" else {}
+        extra = {"director_rate": self.forms.director_rate} if self.scheme == "conserving" else {}
         checkpoint.read_functions(path, {**parts, **extra})
         checkpoint.set_state(ti.v_old, parts, "velocity_")
         checkpoint.set_state(ti.a_old, parts, "acceleration_")
@@ -217,7 +119,7 @@ class DeploymentModel:
     def advance(self) -> None:
         """After a converged step: the new state, velocities and accelerations become the old."""
         if self.scheme == "conserving":  # before q_old moves on
-            self.director_rate.interpolate(self._new_director_rate)
+            self.forms.advance_director_rate()
         self.integrator.advance()
 
     # -- start ----------------------------------------------------------------------------------
@@ -229,22 +131,10 @@ class DeploymentModel:
         is solved with a direct solver; the attached root has zero acceleration.
         """
         model, ti = self.model, self.integrator
-        trial, test = ufl.TrialFunction(model.W), model.dq
-        a_u, a_theta = split_state(trial)
-        du, dtheta = split_state(test)
-        Dd, _, _ = director_rates(model, model.theta, ufl.as_vector([0.0, 0.0]))
-        mass = (
-            (
-                self.translational * ufl.dot(a_u, du)
-                + self.rotary * ufl.dot(ufl.dot(Dd, a_theta), ufl.dot(Dd, dtheta))
-            )
-            * model.jacobian
-            * model.dx
-        )
-        M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(mass), bcs=self.bcs)
+        M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(self.forms.mass_at_rest()), bcs=self.bcs)
         M.assemble()
         internal = dolfinx.fem.Function(model.W)
-        dolfinx.fem.petsc.assemble_vector(internal.x.petsc_vec, dolfinx.fem.form(self._internal_form))
+        dolfinx.fem.petsc.assemble_vector(internal.x.petsc_vec, dolfinx.fem.form(self.forms.internal))
         internal.x.petsc_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.tape.add_self_contact_force(internal)
         b = internal.x.petsc_vec.copy()
@@ -303,7 +193,7 @@ def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: 
         **state_parts(model.hold.stowed, "stowed_"),
     }
     if model.scheme == "conserving":
-        functions["director_rate"] = model.director_rate
+        functions["director_rate"] = model.forms.director_rate
     model.tape.write_checkpoint(path, meta, functions)
 
 

@@ -1,9 +1,10 @@
 """The deployment run: time steps from release to the deployed state, a history row per step.
 
 :class:`DeploymentRun` steps a :class:`~tapecoil.phases.deployment.DeploymentModel` in time
-(generalized-alpha, adaptive steps with cut-back) and records what each step measured;
-:class:`DeploymentPhase` is the run as a phase of the one runner (:mod:`tapecoil.phases.runner`),
-and :func:`run_deployment` runs it into a results directory.
+(generalized-alpha, adaptive steps with cut-back) and records what each step measured
+(:mod:`tapecoil.phases.deployment_rows`); :class:`DeploymentPhase` is the run as a phase of the
+one runner (:mod:`tapecoil.phases.runner`), and :func:`run_deployment` runs it into a results
+directory.
 """
 
 from __future__ import annotations
@@ -16,14 +17,16 @@ from mpi4py import MPI
 
 from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
-from tapecoil.core.stepping import Continuation, ContinuationError, StepRecord
+from tapecoil.core.stepping import Continuation, ContinuationError
 from tapecoil.measures.deployment import deployment_measures
 from tapecoil.phases.deployment import (
     DeploymentModel,
     read_deployment_checkpoint,
     write_deployment_checkpoint,
 )
+from tapecoil.phases.deployment_rows import DeploymentRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
+from tapecoil.phases.stepped import SteppedRun
 from tapecoil.phases.tape_on_hub import TapeOnHub, check_penetration
 
 
@@ -38,12 +41,13 @@ class _Deployed(Exception):
     """Raised from the step callback to end the time loop once lambda reaches lambda_end."""
 
 
-class DeploymentRun:
+class DeploymentRun(SteppedRun):
     """Time stepping from release to ``deployment.lambda_end`` (or ``deployment.t_end``).
 
     Steps start at ``deployment.dt`` and grow by ``solver.grow`` after easy steps up to
     ``max_dt``; a step that fails is cut back (``solver.cutback``, ``solver.max_cutbacks``),
-    as in the load stepping. ``on_step(row)`` is called on every rank after each step.
+    as in the load stepping. ``on_step(row)`` is called on every rank after each step with its
+    row (:class:`~tapecoil.phases.deployment_rows.DeploymentRows`).
     """
 
     # the step grows after steps of at most this many Newton iterations: on the first 20 ms of
@@ -51,77 +55,31 @@ class DeploymentRun:
     easy_iterations = 8
 
     def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None, stop=None):
+        super().__init__(DeploymentResult(), on_step, stop)
         self.m = model
-        self.on_step = on_step
-        self.stop = stop  # StopSignals: checked after every converged step
         d = model.config.deployment
         self.max_dt = max_dt if max_dt is not None else d.max_dt
-        self.result = DeploymentResult()
-        self.stowed_energy = None
-        self.external_work = 0.0
+        self.rows = DeploymentRows(model)
         self.time = 0.0
         self.next_step = None  # the step to try next within the current phase (for a restart)
         self._restored = False
-        self._t0 = time.perf_counter()
 
     def restart_state(self) -> dict:
         """What, besides the model's state, the time stepping needs to go on as if never stopped."""
-        h = self.result.history
         return {
             "time": self.time,
             "next_step": self.next_step,
-            "external_work": self.external_work,
-            "stowed_energy": self.stowed_energy,
-            "history": h,
-            "wall_time_before": h[-1]["wall_time"] if h else 0.0,
+            **self.rows.restart_state(),
+            **self._history_state(),
         }
 
     def restore(self, state: dict) -> None:
         """Continue from :meth:`restart_state` (the model restored from the same checkpoint)."""
         self.time = state["time"]
         self.next_step = state["next_step"]
-        self.external_work = state["external_work"]
-        self.stowed_energy = state["stowed_energy"]
-        self.result.history = list(state["history"])
-        self._t0 -= state["wall_time_before"]
+        self.rows.restore(state)
+        self._restore_history(state)
         self._restored = True
-
-    def _row(self, t: float, step: StepRecord | None) -> dict:
-        m = self.m
-        e = m.energies()
-        potential = e["strain"] + e["contact"]
-        if self.stowed_energy is None:
-            self.stowed_energy = potential
-        lift = m.lift_off()
-        tip = m.tip()
-        row = {
-            "time": t,
-            "step": step.step if step else 0.0,
-            "newton_iterations": step.iterations if step else 0,
-            "cutbacks": step.cutbacks if step else 0,
-            "lambda": lift["lambda"],
-            "coiled_length": lift["coiled_length"],
-            "kinetic_energy": e["kinetic"],
-            "strain_energy": e["strain"],
-            "membrane_energy": e["membrane"],
-            "bending_energy": e["bending"],
-            "shear_energy": e["shear"],
-            "contact_energy": e["contact"],
-            # the work of the releasing hold on the free end
-            "external_work": self.external_work,
-            # the energy the time integration has removed (numerical dissipation: the model has
-            # no physical damping)
-            "dissipated_energy": self.stowed_energy + self.external_work - potential - e["kinetic"],
-            "tip_x": tip[0],
-            "tip_y": tip[1],
-            "tip_z": tip[2],
-            "max_penetration": m.tape.max_penetration(),
-            "wall_time": time.perf_counter() - self._t0,
-        }
-        self.result.history.append(row)
-        if self.on_step is not None:
-            self.on_step(row)
-        return row
 
     def run(self) -> DeploymentResult:
         """Step from release (or the restored time) until lambda_end, t_end or a failure.
@@ -135,7 +93,7 @@ class DeploymentRun:
         ti = m.integrator
         if not self._restored:
             m.initial_acceleration()
-            self._row(0.0, None)
+            self._record(self.rows.row(0.0, None))
         # absolute step limits [s], whatever the span left (a restart steps as the first run)
         smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
 
@@ -159,18 +117,17 @@ class DeploymentRun:
             ti.predict(t_to - t_from)
 
         def converged(step, end):
-            self.external_work += m.hold.work()
+            self.rows.add_hold_work()
             m.advance()
             self.time = step.load
             # a phase that ends here hands over to the next one, which starts afresh
             self.next_step = step.next_step if step.load < end else None
             m.update()
-            row = self._row(step.load, step)
+            row = self._record(self.rows.row(step.load, step))
             check_penetration(row["max_penetration"], m.config, step.load, f"t = {step.load:.6g} s")
             if row["lambda"] >= d.lambda_end:
                 raise _Deployed
-            if self.stop is not None:
-                self.stop.check(m.comm)
+            self._check_stop(m.comm)
 
         # the release in steps of at most a twentieth of it: the hold's spring is stiff and
         # its work is integrated over the steps; then the steps grow to max_dt

@@ -1,0 +1,68 @@
+"""What a step of the deployment measured: its history row, and the energy account it closes.
+
+The model has no physical damping, so what the stowed energy and the release's work do not
+account for in strain, contact and kinetic energy is the time integration's numerical
+dissipation; :class:`DeploymentRows` keeps that account from step to step.
+"""
+
+from __future__ import annotations
+
+from tapecoil.core.stepping import StepRecord
+
+
+class DeploymentRows:
+    """The rows of a :class:`~tapecoil.phases.deployment.DeploymentModel`'s history.
+
+    ``stowed_energy`` is the potential (strain and contact) of the first row, ``external_work``
+    the work of the releasing hold so far; both go into a restart state (:meth:`restart_state`).
+    """
+
+    def __init__(self, model):
+        self.m = model
+        self.stowed_energy = None
+        self.external_work = 0.0
+
+    def restart_state(self) -> dict:
+        return {"external_work": self.external_work, "stowed_energy": self.stowed_energy}
+
+    def restore(self, state: dict) -> None:
+        self.external_work = state["external_work"]
+        self.stowed_energy = state["stowed_energy"]
+
+    def add_hold_work(self) -> None:
+        """The hold's work over the step just solved (before the model advances)."""
+        self.external_work += self.m.hold.work()
+
+    def row(self, t: float, step: StepRecord | None) -> dict:
+        """The row of the state at time ``t`` reached by ``step`` (None: the release), without
+        its wall time."""
+        m = self.m
+        e = m.energies()
+        potential = e["strain"] + e["contact"]
+        if self.stowed_energy is None:
+            self.stowed_energy = potential
+        lift = m.lift_off()
+        tip = m.tip()
+        return {
+            "time": t,
+            "step": step.step if step else 0.0,
+            "newton_iterations": step.iterations if step else 0,
+            "cutbacks": step.cutbacks if step else 0,
+            "lambda": lift["lambda"],
+            "coiled_length": lift["coiled_length"],
+            "kinetic_energy": e["kinetic"],
+            "strain_energy": e["strain"],
+            "membrane_energy": e["membrane"],
+            "bending_energy": e["bending"],
+            "shear_energy": e["shear"],
+            "contact_energy": e["contact"],
+            # the work of the releasing hold on the free end
+            "external_work": self.external_work,
+            # the energy the time integration has removed (numerical dissipation: the model has
+            # no physical damping)
+            "dissipated_energy": self.stowed_energy + self.external_work - potential - e["kinetic"],
+            "tip_x": tip[0],
+            "tip_y": tip[1],
+            "tip_z": tip[2],
+            "max_penetration": m.tape.max_penetration(),
+        }
