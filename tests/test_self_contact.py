@@ -79,7 +79,8 @@ def test_search_finds_the_sheet_above_and_not_its_own_neighbourhood():
 @pytest.fixture(scope="module")
 def folded():
     """A flat strip 0.2 m x 0.02 m whose second half is folded over its first at 0.9 h."""
-    from tapecoil.contact.self_contact import SelfContact, SelfContactTerm
+    from tapecoil.contact.self_contact import SelfContact
+    from tapecoil.contact.term import SelfContactTerm
     from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
     from tapecoil.geometry.surfaces import StripGeometry
     from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
@@ -174,7 +175,8 @@ def test_contact_matrix_is_the_derivative_of_its_force(folded):
 
 def _folded_energy_and_force(comm):
     """Penalty energy and the norm of the contact force of the folded strip on ``comm``."""
-    from tapecoil.contact.self_contact import SelfContact, SelfContactTerm
+    from tapecoil.contact.self_contact import SelfContact
+    from tapecoil.contact.term import SelfContactTerm
     from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
     from tapecoil.geometry.surfaces import StripGeometry
     from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial

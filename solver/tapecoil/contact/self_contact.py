@@ -30,8 +30,8 @@ penetration over the element length, small against the main part when the penetr
 fraction of h.
 
 Parallel: the mid-surface is small (nodes and cells of a 2D mesh), so every rank gathers all
-node positions at each evaluation (one Allgatherv of 3 doubles per node) and searches for its
-own nodes' partners; the forces and the matrix entries go to whichever ranks own the dofs
+node positions at each evaluation (:class:`GatheredSurface`) and searches for its own nodes'
+partners; the forces and the matrix entries go to whichever ranks own the dofs
 (PETSc's stash). The search is a Verlet list (:class:`~tapecoil.contact.projection.CandidateSearch`):
 rebuilt only when a node has moved by more than half the buffer, and exact in between.
 """
@@ -112,6 +112,72 @@ def on_free_edge(ref: np.ndarray, free: np.ndarray, tolerance: float = 1e-9) -> 
     return np.any(at & free, axis=1)
 
 
+class GatheredSurface:
+    """The whole mid-surface on every rank: its nodes (in global node order) and Q2 cells.
+
+    The surface of a 2D mesh is small, so every rank holds all of it: the reference positions,
+    the material coordinates, the u-dofs (global), the nodes' shares of the reference area and
+    the cells (global node numbers), gathered once; the positions at each state are gathered by
+    :meth:`positions` (one Allgatherv of 3 doubles per node).
+    """
+
+    def __init__(self, model, nodes):
+        self.nodes = nodes
+        self.comm = comm = model.mesh.comm
+        imap = nodes.space.dofmap.index_map
+        self.n_owned = n_owned = imap.size_local
+        local_nodes = np.arange(n_owned + imap.num_ghosts, dtype=np.int32)
+        global_node = imap.local_to_global(local_nodes).astype(np.int64)
+        self.n_nodes = imap.size_global
+        W_map, bs = model.W.dofmap.index_map, model.W.dofmap.index_map_bs
+        u_local = nodes.u_dofs[:n_owned].ravel()
+        u_global = (W_map.local_to_global((u_local // bs).astype(np.int32)) * bs + u_local % bs).reshape(
+            -1, 3
+        )
+        test = ufl.TestFunction(nodes.space)
+        area = dolfinx.fem.assemble_vector(dolfinx.fem.form(test * model.jacobian * model.dx))
+        area.scatter_reverse(dolfinx.la.InsertMode.add)
+
+        self.owned = global_node[:n_owned]
+        self._counts = np.array(comm.allgather(n_owned), dtype=np.int64)
+        self._order = np.concatenate(comm.allgather(self.owned))
+        self.reference = self.gather(nodes.reference[:, :n_owned].T.copy())
+        self.material = self.gather(nodes.xi[:, :n_owned].T.copy())
+        self.u_dofs = self.gather(u_global.astype(PETSc.IntType))
+        self.weights = self.gather(area.array[:n_owned].copy())
+        n_cells = model.mesh.topology.index_map(model.mesh.topology.dim).size_local
+        self.cells = np.vstack(comm.allgather(global_node[nodes.space.dofmap.list[:n_cells]]))
+
+    def gather(self, values: np.ndarray) -> np.ndarray:
+        """Per-node values of this rank's owned nodes, for every node, on every rank (collective)."""
+        out = np.empty((self.n_nodes, *values.shape[1:]), dtype=values.dtype)
+        out[self._order] = np.concatenate(self.comm.allgather(values))
+        return out
+
+    def positions(self, q: np.ndarray) -> np.ndarray:
+        """Mid-surface positions (N, 3) of every node at the W-dof array ``q`` (collective)."""
+        u = q[self.nodes.u_dofs[: self.n_owned]]
+        out = np.empty((self.n_nodes, 3))
+        received = np.empty(3 * self.n_nodes)
+        self.comm.Allgatherv(np.ascontiguousarray(u.ravel()), [received, 3 * self._counts])
+        out[self._order] = received.reshape(-1, 3)
+        return out + self.reference
+
+
+def nearest_on_each_side(node, cell, side, distance, inside, memory=None) -> np.ndarray:
+    """Indices of the pairs kept: for each node and side, the partner cell it kept (``memory``
+    (2 N,), updated here; -1 none) while its closest point stays ``inside`` it, else the closest.
+    """
+    keys = node * 2 + (side > 0)
+    kept = np.zeros(len(node), dtype=bool) if memory is None else (memory[keys] == cell) & inside
+    order = np.lexsort((distance, ~kept, side, node))
+    key = keys[order]
+    first = order[np.concatenate([[True], key[1:] != key[:-1]])] if len(order) else order
+    if memory is not None:
+        memory[keys[first]] = cell[first]
+    return first
+
+
 class SelfContact:
     """Self-contact of a :class:`~tapecoil.models.shell.NaghdiShell` (see the module docstring).
 
@@ -125,41 +191,15 @@ class SelfContact:
 
     def __init__(self, model, nodes, thickness, penalty, smoothing, buffer, exclusion, side_hint=None):
         self.model, self.nodes = model, nodes
-        self.comm = comm = model.mesh.comm
+        self.comm = model.mesh.comm
         self.h, self.penalty, self.delta = thickness, penalty, smoothing
         # pairs beyond this gap carry no force (the smoothed bracket is below 1e-5 delta there)
         self.cutoff = 12.0 * smoothing
-        imap = nodes.space.dofmap.index_map
-        self.n_owned = n_owned = imap.size_local
-        local_nodes = np.arange(n_owned + imap.num_ghosts, dtype=np.int32)
-        global_node = imap.local_to_global(local_nodes).astype(np.int64)
-        self.n_nodes = imap.size_global
-        W_map, bs = model.W.dofmap.index_map, model.W.dofmap.index_map_bs
-        u_local = nodes.u_dofs[:n_owned].ravel()
-        u_global = (W_map.local_to_global((u_local // bs).astype(np.int32)) * bs + u_local % bs).reshape(
-            -1, 3
-        )
-
-        test = ufl.TestFunction(nodes.space)
-        area = dolfinx.fem.assemble_vector(dolfinx.fem.form(test * model.jacobian * model.dx))
-        area.scatter_reverse(dolfinx.la.InsertMode.add)
-
-        owned = global_node[:n_owned]
-        self._counts = np.array(comm.allgather(n_owned), dtype=np.int64)
-        self._order = np.concatenate(comm.allgather(owned))
-        self.owned = owned
-
-        def gather(values):
-            out = np.empty((self.n_nodes, *values.shape[1:]), dtype=values.dtype)
-            out[self._order] = np.concatenate(comm.allgather(values))
-            return out
-
-        self.reference = gather(nodes.reference[:, :n_owned].T.copy())
-        self.material = gather(nodes.xi[:, :n_owned].T.copy())
-        self.u_dofs = gather(u_global.astype(PETSc.IntType))
-        self.weights = gather(area.array[:n_owned].copy())
-        n_cells = model.mesh.topology.index_map(model.mesh.topology.dim).size_local
-        self.cells = np.vstack(comm.allgather(global_node[nodes.space.dofmap.list[:n_cells]]))
+        surface = GatheredSurface(model, nodes)
+        self.surface = surface
+        self.n_owned, self.n_nodes, self.owned = surface.n_owned, surface.n_nodes, surface.owned
+        self.reference, self.material = surface.reference, surface.material
+        self.u_dofs, self.weights, self.cells = surface.u_dofs, surface.weights, surface.cells
         self.buffer, self.exclusion, self.side_hint = buffer, exclusion, side_hint
         self.reach = thickness + self.cutoff
         self.free_edges = free_edges(self.cells)
@@ -184,12 +224,7 @@ class SelfContact:
     def positions(self, q: np.ndarray) -> np.ndarray:
         """Mid-surface positions (N, 3) of every node of the surface, on every rank (collective)."""
         t0 = time.perf_counter()
-        u = q[self.nodes.u_dofs[: self.n_owned]]
-        out = np.empty((self.n_nodes, 3))
-        received = np.empty(3 * self.n_nodes)
-        self.comm.Allgatherv(np.ascontiguousarray(u.ravel()), [received, 3 * self._counts])
-        out[self._order] = received.reshape(-1, 3)
-        out += self.reference
+        out = self.surface.positions(q)
         self.timings["gather"] += time.perf_counter() - t0
         return out
 
@@ -270,17 +305,7 @@ class SelfContact:
         keep = over & (gap < self.cutoff)
         node, cell, gap, side, distance = node[keep], cell[keep], gap[keep], side[keep], distance[keep]
         direction, N, ref = direction[keep], found["N"][keep], found["ref"][keep]
-        # the closest part of the surface on each side of each node
-        keys = node * 2 + (side > 0)
-        if memory is None:
-            kept = np.zeros(len(node), dtype=bool)
-        else:
-            kept = (memory[keys] == cell) & inside_cell(ref)
-        order = np.lexsort((distance, ~kept, side, node))
-        key = keys[order]
-        first = order[np.concatenate([[True], key[1:] != key[:-1]])] if len(order) else order
-        if memory is not None:
-            memory[keys[first]] = cell[first]
+        first = nearest_on_each_side(node, cell, side, distance, inside_cell(ref), memory)
         node, cell, gap, N, e = node[first], cell[first], gap[first], N[first], direction[first]
         t2 = time.perf_counter()
         self.timings["search"] += t1 - t0
@@ -320,136 +345,3 @@ class SelfContact:
         """The deepest penetration -g of any part of the surface into another [m], >= 0 (collective)."""
         local = float(-pairs.gap.min()) if pairs.gap.size else 0.0
         return max(self.comm.allreduce(local, op=MPI.MAX), 0.0)
-
-
-class PairsAtState:
-    """The contact pairs of one state, kept while that state and the converged one are unchanged.
-
-    The decision is collective: :meth:`SelfContact.pairs` gathers positions from every rank,
-    so every rank must agree to compute them again, also when only some ranks' dofs changed.
-    """
-
-    def __init__(self, contact: SelfContact):
-        self.contact = contact
-        self.clear()
-
-    def clear(self) -> None:
-        self._q = self._version = self._pairs = None
-
-    def get(self, q: np.ndarray, compute) -> ContactPairs:
-        """The pairs at the W-dof array ``q``: kept ones, or ``compute()`` (collective)."""
-        same = (
-            self._q is not None
-            and self._version == self.contact._reference_version
-            and np.array_equal(self._q, q)
-        )
-        if self.contact.comm.allreduce(int(not same), op=MPI.MAX):
-            self._pairs = compute()
-            self._q, self._version = q.copy(), self.contact._reference_version
-        return self._pairs
-
-
-class SelfContactTerm:
-    """The self-contact's force and matrix in a :class:`~tapecoil.core.newton.SNESSolver`.
-
-    ``q``: the solver's state; ``bcs``: its Dirichlet conditions (their dofs take no contact
-    entries: the solver sets those rows). The force enters as ``weight`` f(q) and, with
-    ``previous = (weight_old, q_old)``, plus weight_old f(q_old): the force average of
-    generalized-alpha.
-    """
-
-    def __init__(self, contact: SelfContact, q, bcs, weight: float = 1.0, previous=None):
-        self.contact, self.q = contact, q
-        comm = contact.comm
-        W_map, bs = q.function_space.dofmap.index_map, q.function_space.dofmap.index_map_bs
-        constrained = [bc.dof_indices()[0] for bc in bcs]
-        local = np.concatenate(constrained) if constrained else np.zeros(0, np.int32)
-        owned = local[local < W_map.size_local * bs]
-        glob = W_map.local_to_global((owned // bs).astype(np.int32)) * bs + owned % bs
-        fixed = np.unique(np.concatenate(comm.allgather(glob)))
-        self.dofs = np.where(np.isin(contact.u_dofs, fixed), -1, contact.u_dofs).astype(PETSc.IntType)
-        self.weight, self.previous = weight, previous
-        self.search, self.search_previous = contact.new_search(), contact.new_search()
-        self._kept = {"current": PairsAtState(contact), "previous": PairsAtState(contact)}
-        self._pattern: set[int] = set()
-        self._memory = np.full(2 * contact.n_nodes, -1, dtype=np.int64)
-        self._memory_converged, self._converged_version = self._memory.copy(), -1
-        self.pattern_extensions = 0
-
-    def _pairs(self, name: str, q: np.ndarray, search: CandidateSearch) -> ContactPairs:
-        memory = self._memory if name == "current" else None
-        return self._kept[name].get(q, lambda: self.contact.pairs(q, search, self.dofs, memory))
-
-    def begin(self) -> None:
-        """Before a solve: the partners kept are those of the last converged state.
-
-        A solve that follows a converged one takes the partners it ended with; a retry (after
-        a failed solve, from the same converged state) forgets what the failed one chose.
-        """
-        if self.contact._reference_version != self._converged_version:
-            self._memory_converged[:] = self._memory
-            self._converged_version = self.contact._reference_version
-        else:
-            self._memory[:] = self._memory_converged
-        for kept in self._kept.values():
-            kept.clear()
-
-    def current(self) -> ContactPairs:
-        return self._pairs("current", self.q.x.array, self.search)
-
-    def add_residual(self, b: PETSc.Vec) -> None:
-        """Add the contact force to the residual vector ``b`` (collective)."""
-        parts = [(self.weight, self.current())]
-        if self.previous is not None:
-            weight_old, q_old = self.previous
-            parts.append((weight_old, self._pairs("previous", q_old.x.array, self.search_previous)))
-        t0 = time.perf_counter()
-        for weight, pairs in parts:
-            values = ((weight * pairs.force)[:, None] * pairs.B).ravel()
-            dofs = pairs.dofs.ravel()
-            free = dofs >= 0  # a vector, unlike a matrix, takes no negative index
-            b.setValues(dofs[free], values[free], addv=PETSc.InsertMode.ADD)
-        b.assemblyBegin()
-        b.assemblyEnd()
-        self.contact.timings["assembly"] += time.perf_counter() - t0
-
-    def add_jacobian(self, A: PETSc.Mat) -> bool:
-        """Add the contact matrix to ``A`` (collective); True if A's pattern had to be widened."""
-        pairs = self.current()
-        t0 = time.perf_counter()
-        keys = pairs.node * len(self.contact.cells) + pairs.cell
-        new = np.array([k not in self._pattern for k in keys.tolist()], dtype=bool)
-        A.assemble()
-        widen = self.contact.comm.allreduce(int(new.sum()), op=MPI.SUM) > 0
-        if widen:
-            self._widen(A, pairs.dofs[new])
-            self._pattern.update(keys[new].tolist())
-        blocks = (self.weight * pairs.stiffness)[:, None, None] * pairs.B[:, :, None] * pairs.B[:, None, :]
-        add = PETSc.InsertMode.ADD
-        for dofs, block in zip(pairs.dofs, blocks, strict=True):
-            A.setValues(dofs, dofs, block, addv=add)
-        self.contact.timings["assembly"] += time.perf_counter() - t0
-        return widen
-
-    def _widen(self, A: PETSc.Mat, dofs: np.ndarray) -> None:
-        """Add the couplings of the pairs ``dofs`` (P, 30) to A's nonzero pattern (collective).
-
-        The couplings go into a matrix C of zeros (PETSc's stash takes the rows other ranks own;
-        C is small, so its own growth costs little), and A + C with a different pattern builds
-        the union pattern with its exact preallocation in one pass, instead of a reallocation of
-        A for each row that gains an entry.
-        """
-        C = PETSc.Mat().create(A.getComm())
-        C.setSizes(A.getSizes())
-        C.setType(PETSc.Mat.Type.AIJ)
-        C.setPreallocationNNZ((30, 30))
-        C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-        zeros = np.zeros((dofs.shape[1], dofs.shape[1]))
-        for pair in dofs:
-            C.setValues(pair, pair, zeros, addv=PETSc.InsertMode.ADD)
-        C.assemble()
-        lgmaps = A.getLGMap()
-        A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        A.setLGMap(*lgmaps)
-        C.destroy()
-        self.pattern_extensions += 1

@@ -10,9 +10,7 @@ the (changed) boundary values is driven onto them: the residual on a constrained
 
 from __future__ import annotations
 
-import re
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import dolfinx
@@ -22,18 +20,7 @@ from petsc4py import PETSc
 
 from tapecoil.core import compat
 from tapecoil.core.convergence import ResidualTest
-
-DEFAULT_PETSC_OPTIONS = {
-    "snes_type": "newtonls",
-    # full Newton steps: with large rotation increments the backtracking line search creeps
-    # (measured on the roll-up cantilever); load-step cut-back handles divergence instead
-    "snes_linesearch_type": "basic",
-    "ksp_type": "preonly",
-    "pc_type": "lu",
-    "pc_factor_mat_solver_type": "mumps",
-}
-
-_PREFIX = re.compile(r"[A-Za-z][A-Za-z0-9_]*_")
+from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix, options_in_database
 
 
 @dataclass
@@ -77,11 +64,7 @@ class SNESSolver:
     def __init__(
         self, F, J, q, bcs, *, prefix, options=None, rtol=1e-8, atol=1e-10, max_it=25, state_scale=None
     ):
-        if not isinstance(prefix, str) or not _PREFIX.fullmatch(prefix):
-            raise ValueError(
-                f"PETSc options prefix {prefix!r}: letters, digits and underscores, starting with a "
-                "letter and ending in an underscore (e.g. 'coil_')"
-            )
+        check_prefix(prefix)
         self.q = q
         self.bcs = list(bcs)
         self.F_form = dolfinx.fem.form(F)
@@ -107,49 +90,17 @@ class SNESSolver:
         self.snes.setOptionsPrefix(prefix)
         self.snes.setFunction(self._residual, self.b)
         self.snes.setJacobian(self._jacobian, self.A)
-        # no step-length test: the state holds director angles of tens of radians, against which
-        # a small Newton step says nothing about the residual (see core.convergence)
-        self.snes.setTolerances(rtol=rtol, atol=atol, stol=0.0, max_it=max_it)
-        # no divergence test either, unless asked for (-<prefix>snes_divergence_tolerance): full
-        # Newton steps on a thin shell raise the residual 1e4-fold in their first iteration and
-        # then converge in three more (the slit annular plate: with PETSc's 1e4 the first load
-        # step is cut back 8 times and the plate takes 416 steps instead of 37)
-        self.snes.setDivergenceTolerance(PETSc.UNLIMITED)
+        self.snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
+        self.convergence = ResidualTest(
+            None if state_scale is None else state_scale.x.array[: self.x.getLocalSize()]
+        )
+        self.convergence.install(self.snes)  # before the options are read: they may change it
         self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
-        with self._options_in_database():
+        with options_in_database(self.prefix, self.options):
             self.snes.setFromOptions()
             self.snes.getKSP().setFromOptions()
-            # the user's -<prefix>snes_convergence_test (PETSc's own tests) wins over ours
-            self.convergence = ResidualTest(
-                None if state_scale is None else state_scale.x.array[: self.x.getLocalSize()]
-            )
-            if not PETSc.Options().hasName(prefix + "snes_convergence_test"):
-                self.snes.setConvergenceTest(self.convergence)
         # a non-finite residual ends the solve as diverged instead of poisoning the state
         self.snes.setErrorIfNotConverged(False)
-
-    @contextmanager
-    def _options_in_database(self):
-        """This solver's options in PETSc's global database while PETSc reads them.
-
-        A key the database already holds (the user's command line) is left alone, so it wins;
-        the keys inserted here are deleted afterwards, so that none reaches the next solver
-        with the same prefix. Solves run inside this too: PETSc reads some options only when it
-        sets up the factorisation at the first solve (MUMPS' ``mat_mumps_icntl_*``), long after
-        setFromOptions. The database is per process; every rank inserts the same keys.
-        """
-        opts = PETSc.Options()
-        inserted = []
-        for key, value in self.options.items():
-            name = self.prefix + key
-            if not opts.hasName(name):
-                opts[name] = value
-                inserted.append(name)
-        try:
-            yield
-        finally:
-            for name in inserted:
-                opts.delValue(name)
 
     def _update_state(self, x) -> None:
         qv = self.q.x.petsc_vec
@@ -194,7 +145,7 @@ class SNESSolver:
             term.begin()
         self.q.x.petsc_vec.copy(self.x)
         t0 = time.perf_counter()
-        with self._options_in_database():
+        with options_in_database(self.prefix, self.options):
             self.snes.solve(None, self.x)
         self.timings["solve"] += time.perf_counter() - t0
         self.timings["iterations"] += self.snes.getIterationNumber()

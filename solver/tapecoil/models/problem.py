@@ -17,6 +17,8 @@ stepping runs over lambda in those units::
 
 from __future__ import annotations
 
+import time
+
 import dolfinx
 import numpy as np
 import ufl
@@ -28,11 +30,11 @@ from tapecoil.core.newton import PointForce, SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
 from tapecoil.geometry.meshes import XI1_MAX, XI1_MIN, XI2_MAX, XI2_MIN, MeshResolution, create_strip_mesh
 from tapecoil.geometry.surfaces import Surface
-from tapecoil.models.edges import clamp, facet_condition
+from tapecoil.models.edges import clamp
 from tapecoil.models.shell import NaghdiShell, ShellMaterial
+from tapecoil.models.supports import fixed_point, symmetry_plane
 
 EDGES = {"xi1_min": XI1_MIN, "xi1_max": XI1_MAX, "xi2_min": XI2_MIN, "xi2_max": XI2_MAX}
-AXES = "xyz"
 
 
 class _PerUnitLoad:
@@ -72,6 +74,7 @@ class ShellProblem:
         self.bcs: list = []
         self.work_per_load = None  # UFL form: the external work of the loads per unit lambda
         self.point_forces: list[PointForce] = []
+        self.wall_time = 0.0  # of the last solve [s]
 
     # --- where things are
     def edge(self, name: str) -> int:
@@ -82,12 +85,6 @@ class ShellProblem:
 
     def _facets(self, edge: str) -> np.ndarray:
         return self.strip.facet_tags.find(self.edge(edge))
-
-    def _edge_points(self, edge: str) -> np.ndarray:
-        """Parameter points (2, n) of this rank's dofs on the edge (some ranks hold none)."""
-        V, _ = self.model.W.sub(0).sub(0).collapse()
-        dofs = dolfinx.fem.locate_dofs_topological(V, 1, self._facets(edge))
-        return V.tabulate_dof_coordinates()[dofs, :2].T
 
     def _line_element(self, edge: str):
         """Physical length per unit parameter length along the edge: |d phi0 / d xi_k|, k along it."""
@@ -109,62 +106,15 @@ class ShellProblem:
         self.bcs += clamp(self.model, self.edge(edge)).bcs
 
     def symmetry_plane(self, edge: str, normal) -> None:
-        """The edge lies on a plane of symmetry with unit ``normal`` (a coordinate axis).
-
-        The displacement along the normal vanishes and the director stays in the plane. The
-        plane must contain the edge and the shell's normal there, so that it is normal to one
-        of the edge's tangents t1 or t2; then keeping the director in the plane is, exactly,
-        the vanishing of the one director angle that tilts it towards that tangent (theta_0
-        towards t2, theta_1 towards t1).
-        """
-        n = np.asarray(normal, dtype=float)
-        axis = int(np.argmax(np.abs(n)))
-        if n.shape != (3,) or not np.isclose(abs(n[axis]), 1.0) or np.count_nonzero(n) != 1:
-            raise ValueError(f"symmetry plane on {edge}: normal {tuple(n)} must be +-x, +-y or +-z")
-        comm = self.strip.mesh.comm
-        xi = self._edge_points(edge)
-        X = self.surface.phi0(xi)[axis] if xi.size else np.empty(0)
-        t1, t2, _ = self.surface.frame(xi) if xi.size else (np.zeros((3, 0)),) * 3
-        lo = comm.allreduce(X.min(initial=np.inf), op=MPI.MIN)
-        hi = comm.allreduce(X.max(initial=-np.inf), op=MPI.MAX)
-        scale = max(1.0, np.abs(self.surface.phi0(self._edge_points(edge))).max(initial=0.0))
-        scale = comm.allreduce(scale, op=MPI.MAX)
-        if hi - lo > 1e-9 * scale:
-            raise ValueError(
-                f"symmetry plane on {edge}: the edge is not in a plane normal to {AXES[axis]} "
-                f"({AXES[axis]} spans {lo:.6g} to {hi:.6g} along it)"
-            )
-        along = [
-            comm.allreduce(bool(np.all(np.isclose(np.abs(t[axis]), 1.0))), op=MPI.LAND) for t in (t2, t1)
-        ]
-        if not any(along):
-            raise ValueError(
-                f"symmetry plane on {edge}: the plane normal to {AXES[axis]} must contain the shell's "
-                "normal, i.e. be normal to the tangent t1 or t2 all along the edge"
-            )
-        angle = 0 if along[0] else 1
-        facets = self._facets(edge)
-        self.bcs += [facet_condition(self.model, sub, facets)[1] for sub in ((0, axis), (1, angle))]
+        """The edge lies on a plane of symmetry with unit ``normal`` (+-x, +-y or +-z): see
+        :func:`~tapecoil.models.supports.symmetry_plane`."""
+        self.bcs += symmetry_plane(self.model, self._facets(edge), normal, edge)
 
     def fix_point(self, point, directions: str = "xyz") -> None:
         """Zero displacement along ``directions`` (any of x, y, z) at the node at ``point``
         (parameter coordinates): a support against rigid motion."""
-        if not directions or any(c not in AXES for c in directions):
-            raise ValueError(f"fix_point: directions {directions!r} must be made of x, y and z")
         self._require_node(point, "fix_point")
-        p = np.asarray(point, dtype=float)
-
-        def at_point(x):
-            return np.isclose(x[0], p[0], atol=1e-10 * (1 + abs(p[0]))) & np.isclose(
-                x[1], p[1], atol=1e-10 * (1 + abs(p[1]))
-            )
-
-        for c in directions:
-            space = self.model.W.sub(0).sub(AXES.index(c))
-            collapsed, _ = space.collapse()
-            dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_point)
-            zero = dolfinx.fem.Function(collapsed)
-            self.bcs.append(dolfinx.fem.dirichletbc(zero, dofs, space))
+        self.bcs += fixed_point(self.model, point, directions)
 
     # --- loads, per unit of the load parameter
     def _add_work(self, work) -> None:
@@ -242,11 +192,13 @@ class ShellProblem:
         def set_load(value: float) -> None:
             self.load.value = value
 
+        t0 = time.perf_counter()
         try:
             return Continuation(solver.solve, set_load, self.model.q, control, on_step=on_step).run(
                 0.0, load, stops
             )
         finally:
+            self.wall_time = time.perf_counter() - t0
             solver.destroy()
 
     def displacement_at(self, point) -> np.ndarray:

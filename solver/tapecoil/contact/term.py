@@ -1,0 +1,150 @@
+"""The self-contact's force and Newton matrix in a :class:`~tapecoil.core.newton.SNESSolver`.
+
+The solver calls the term at every residual and Jacobian (its ``terms``); the contact couples
+dofs of distant parts of the mesh, so the matrix's nonzero pattern is widened when new pairs
+appear (:meth:`SelfContactTerm.add_jacobian`).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from tapecoil.contact.projection import CandidateSearch
+from tapecoil.contact.self_contact import ContactPairs, SelfContact
+
+
+class PairsAtState:
+    """The contact pairs of one state, kept while that state and the converged one are unchanged.
+
+    The decision is collective: :meth:`SelfContact.pairs` gathers positions from every rank,
+    so every rank must agree to compute them again, also when only some ranks' dofs changed.
+    """
+
+    def __init__(self, contact: SelfContact):
+        self.contact = contact
+        self.clear()
+
+    def clear(self) -> None:
+        self._q = self._version = self._pairs = None
+
+    def get(self, q: np.ndarray, compute) -> ContactPairs:
+        """The pairs at the W-dof array ``q``: kept ones, or ``compute()`` (collective)."""
+        same = (
+            self._q is not None
+            and self._version == self.contact._reference_version
+            and np.array_equal(self._q, q)
+        )
+        if self.contact.comm.allreduce(int(not same), op=MPI.MAX):
+            self._pairs = compute()
+            self._q, self._version = q.copy(), self.contact._reference_version
+        return self._pairs
+
+
+class SelfContactTerm:
+    """The self-contact's force and matrix in a :class:`~tapecoil.core.newton.SNESSolver`.
+
+    ``q``: the solver's state; ``bcs``: its Dirichlet conditions (their dofs take no contact
+    entries: the solver sets those rows). The force enters as ``weight`` f(q) and, with
+    ``previous = (weight_old, q_old)``, plus weight_old f(q_old): the force average of
+    generalized-alpha.
+    """
+
+    def __init__(self, contact: SelfContact, q, bcs, weight: float = 1.0, previous=None):
+        self.contact, self.q = contact, q
+        comm = contact.comm
+        W_map, bs = q.function_space.dofmap.index_map, q.function_space.dofmap.index_map_bs
+        constrained = [bc.dof_indices()[0] for bc in bcs]
+        local = np.concatenate(constrained) if constrained else np.zeros(0, np.int32)
+        owned = local[local < W_map.size_local * bs]
+        glob = W_map.local_to_global((owned // bs).astype(np.int32)) * bs + owned % bs
+        fixed = np.unique(np.concatenate(comm.allgather(glob)))
+        self.dofs = np.where(np.isin(contact.u_dofs, fixed), -1, contact.u_dofs).astype(PETSc.IntType)
+        self.weight, self.previous = weight, previous
+        self.search, self.search_previous = contact.new_search(), contact.new_search()
+        self._kept = {"current": PairsAtState(contact), "previous": PairsAtState(contact)}
+        self._pattern: set[int] = set()
+        self._memory = np.full(2 * contact.n_nodes, -1, dtype=np.int64)
+        self._memory_converged, self._converged_version = self._memory.copy(), -1
+        self.pattern_extensions = 0
+
+    def _pairs(self, name: str, q: np.ndarray, search: CandidateSearch) -> ContactPairs:
+        memory = self._memory if name == "current" else None
+        return self._kept[name].get(q, lambda: self.contact.pairs(q, search, self.dofs, memory))
+
+    def begin(self) -> None:
+        """Before a solve: the partners kept are those of the last converged state.
+
+        A solve that follows a converged one takes the partners it ended with; a retry (after
+        a failed solve, from the same converged state) forgets what the failed one chose.
+        """
+        if self.contact._reference_version != self._converged_version:
+            self._memory_converged[:] = self._memory
+            self._converged_version = self.contact._reference_version
+        else:
+            self._memory[:] = self._memory_converged
+        for kept in self._kept.values():
+            kept.clear()
+
+    def current(self) -> ContactPairs:
+        return self._pairs("current", self.q.x.array, self.search)
+
+    def add_residual(self, b: PETSc.Vec) -> None:
+        """Add the contact force to the residual vector ``b`` (collective)."""
+        parts = [(self.weight, self.current())]
+        if self.previous is not None:
+            weight_old, q_old = self.previous
+            parts.append((weight_old, self._pairs("previous", q_old.x.array, self.search_previous)))
+        t0 = time.perf_counter()
+        for weight, pairs in parts:
+            values = ((weight * pairs.force)[:, None] * pairs.B).ravel()
+            dofs = pairs.dofs.ravel()
+            free = dofs >= 0  # a vector, unlike a matrix, takes no negative index
+            b.setValues(dofs[free], values[free], addv=PETSc.InsertMode.ADD)
+        b.assemblyBegin()
+        b.assemblyEnd()
+        self.contact.timings["assembly"] += time.perf_counter() - t0
+
+    def add_jacobian(self, A: PETSc.Mat) -> bool:
+        """Add the contact matrix to ``A`` (collective); True if A's pattern had to be widened."""
+        pairs = self.current()
+        t0 = time.perf_counter()
+        keys = pairs.node * len(self.contact.cells) + pairs.cell
+        new = np.array([k not in self._pattern for k in keys.tolist()], dtype=bool)
+        A.assemble()
+        widen = self.contact.comm.allreduce(int(new.sum()), op=MPI.SUM) > 0
+        if widen:
+            self._widen(A, pairs.dofs[new])
+            self._pattern.update(keys[new].tolist())
+        blocks = (self.weight * pairs.stiffness)[:, None, None] * pairs.B[:, :, None] * pairs.B[:, None, :]
+        add = PETSc.InsertMode.ADD
+        for dofs, block in zip(pairs.dofs, blocks, strict=True):
+            A.setValues(dofs, dofs, block, addv=add)
+        self.contact.timings["assembly"] += time.perf_counter() - t0
+        return widen
+
+    def _widen(self, A: PETSc.Mat, dofs: np.ndarray) -> None:
+        """Add the couplings of the pairs ``dofs`` (P, 30) to A's nonzero pattern (collective).
+
+        The couplings go into a matrix C of zeros (PETSc's stash takes the rows other ranks own;
+        C is small, so its own growth costs little), and A + C with a different pattern builds
+        the union pattern with its exact preallocation in one pass, instead of a reallocation of
+        A for each row that gains an entry.
+        """
+        C = PETSc.Mat().create(A.getComm())
+        C.setSizes(A.getSizes())
+        C.setType(PETSc.Mat.Type.AIJ)
+        C.setPreallocationNNZ((30, 30))
+        C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        zeros = np.zeros((dofs.shape[1], dofs.shape[1]))
+        for pair in dofs:
+            C.setValues(pair, pair, zeros, addv=PETSc.InsertMode.ADD)
+        C.assemble()
+        lgmaps = A.getLGMap()
+        A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        A.setLGMap(*lgmaps)
+        C.destroy()
+        self.pattern_extensions += 1
