@@ -63,6 +63,7 @@ def _type_name(tp: Any) -> str:
         bool: "true or false",
         str: "a string",
         dict: "a table",
+        list: "a list of numbers",
     }.get(tp, str(tp))
 
 
@@ -74,6 +75,11 @@ def coerce(key: str, tp: Any, value: Any) -> Any:
         or (tp is bool and isinstance(value, bool))
         or (tp is str and isinstance(value, str))
         or (tp is dict and isinstance(value, dict))
+        or (
+            tp is list
+            and isinstance(value, list)
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        )
     )
     if not ok:
         raise ConfigError(f"{key} must be {_type_name(tp)} (got {type(value).__name__} {value!r})")
@@ -81,6 +87,10 @@ def coerce(key: str, tp: Any, value: Any) -> Any:
         value = float(value)
         if not math.isfinite(value):
             raise ConfigError(f"{key} must be a finite number (got {value!r})")
+    if tp is list:
+        value = [float(v) for v in value]
+        if not all(math.isfinite(v) for v in value):
+            raise ConfigError(f"{key} must hold finite numbers (got {value!r})")
     if tp is dict:
         for k, v in value.items():
             if not isinstance(v, (str, int, float, bool)):

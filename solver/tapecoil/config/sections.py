@@ -256,6 +256,10 @@ class DeploymentConfig:
         release_time: time over which the hold on the free end (pull and guide) is released [s].
         rho_inf: high-frequency spectral radius of generalized-alpha [-]; 1 is trapezoidal Newmark.
         lambda_end: deployed fraction at which the run stops early [-].
+        gravity: gravitational acceleration [m/s^2], (x, y, z) in the tape's coordinates
+            (x along the stowed tape's free part, y along the hub's axis, z up from the
+            hub), acting from release, for comparison with ground tests; [0, 0, -9.81] hangs
+            the tape below its free part's line. Default none (space).
         petsc_options: PETSc options without prefix for the deployment's solver (prefix
             deploy_), over [solver] petsc_options, e.g. {snes_monitor = ""}.
     """
@@ -266,6 +270,7 @@ class DeploymentConfig:
     release_time: float = param(2e-3, "s", NON_NEGATIVE)
     rho_inf: float = param(0.5, "-", Range(0.0, 1.0))
     lambda_end: float = param(1.0, "-", Range(0.0, 1.0, True))
+    gravity: list = param([0.0, 0.0, 0.0], "m/s^2")
     petsc_options: dict = param({}, "")
 
     def check(self) -> None:
@@ -276,6 +281,15 @@ class DeploymentConfig:
         if self.max_dt < self.dt:
             raise ConfigError(
                 f"deployment.max_dt = {self.max_dt:g} s must be at least deployment.dt = {self.dt:g} s"
+            )
+        if len(self.gravity) != 3:
+            raise ConfigError(
+                f"deployment.gravity must have three components (x, y, z), got {self.gravity!r}"
+            )
+        if math.hypot(*self.gravity) > 100.0:
+            raise ConfigError(
+                f"deployment.gravity = {self.gravity!r} m/s^2 is out of range: at most 100 m/s^2 in "
+                "magnitude (ten times the Earth's; beyond, a unit is likely wrong)"
             )
 
 

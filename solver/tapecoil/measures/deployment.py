@@ -165,3 +165,32 @@ def lift_off(tape, gap_factor: float) -> dict[str, float]:
         tangent = math.sqrt((r[i] + G) ** 2 - r[i] ** 2)
         coiled = max(float(s[i] + w * (s[i + 1] - s[i])) - tangent, 0.0)
     return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+
+
+def root_load_peaks(history: list[dict], end_lambda: float = 0.9) -> dict:
+    """The peaks of the root's loads on the hub through deployment (summary entries root_*).
+
+    For the force's magnitude [N], the moment's magnitude [N m] and the torque about the hub's
+    axis [N m]: the largest over the run, with its time and deployed fraction. ``root_force_end``:
+    the largest force once lambda has reached ``end_lambda``, the end of the deployment, where
+    the tape pulls straight and the root takes the shock.
+    """
+    t = np.array([r["time"] for r in history])
+    lam = np.array([r["lambda"] for r in history])
+    force = np.linalg.norm([[r[f"root_force_{a}"] for a in "xyz"] for r in history], axis=1)
+    moment = np.linalg.norm([[r[f"root_moment_{a}"] for a in "xyz"] for r in history], axis=1)
+    torque = np.abs([r["root_torque"] for r in history])
+
+    def peak(values, mask=None):
+        if mask is not None and not mask.any():
+            return None
+        i = int(np.argmax(np.where(mask, values, -np.inf) if mask is not None else values))
+        return {"value": float(values[i]), "time": float(t[i]), "lambda": float(lam[i])}
+
+    end = np.maximum.accumulate(lam) >= end_lambda
+    return {
+        "root_force_peak": peak(force),
+        "root_moment_peak": peak(moment),
+        "root_torque_peak": peak(torque),
+        "root_force_end": peak(force, end),
+    }

@@ -157,12 +157,14 @@ class ShellProblem:
         on_step=None,
         solver_config: SolverConfig | None = None,
         prefix: str | None = None,
+        options: dict | None = None,
     ) -> list[StepRecord]:
         """Step lambda from 0 to ``load`` (adaptive, with cut-back); steps in lambda's units.
 
         ``stops``: values of lambda stepped onto exactly; ``on_step(record)`` after each
         converged step (``record.load`` is lambda). ``min_step`` defaults to 1e-6 ``load``;
-        ``solver_config``: the ``[solver]`` settings (Newton tolerances, cut-back, PETSc options).
+        ``solver_config``: the ``[solver]`` settings (Newton tolerances, cut-back, PETSc options);
+        ``options``: the problem's own PETSc options (without prefix), under those settings'.
         """
         if not (np.isfinite(load) and load > 0):
             raise ValueError(f"solve: load {load} must be positive")
@@ -181,6 +183,7 @@ class ShellProblem:
             self.bcs,
             settings,
             prefix=prefix or f"{self.name}_",
+            defaults=options,
             state_scale=self.model.rounding_scale(),
         )
         solver.point_forces.extend(self.point_forces)

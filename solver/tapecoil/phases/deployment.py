@@ -35,6 +35,7 @@ from tapecoil.geometry.meshes import FREE_END
 from tapecoil.measures.deployment import lift_off
 from tapecoil.phases.deployment_forms import DeploymentForms, director_rates  # noqa: F401 - re-exported
 from tapecoil.phases.release import EndHold
+from tapecoil.phases.root_loads import RootLoads
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
@@ -70,14 +71,21 @@ class DeploymentModel:
         # the hold on the free end (the guide and the pull of the coiling run), let go over
         # release_time (phases.release)
         self.hold = EndHold(c, ti, cfg.deployment.release_time)
-        hold = self.hold.form
+        # the loads on the tape: the hold, and gravity where there is any (a ground test)
+        self.gravity = np.asarray(cfg.deployment.gravity, dtype=float)
+        loads = self.hold.form
+        self._weight = self._weight_work = None
+        if np.any(self.gravity):
+            self._weight = dolfinx.fem.form(forms.weight(self.gravity))
+            self._weight_work = dolfinx.fem.form(forms.weight_work(self.gravity))
+            loads = loads - forms.weight(self.gravity)
 
         self.scheme = "conserving" if self.rho_inf == 1.0 else "alpha"
         if self.scheme == "alpha":
-            F, J, kinetic = forms.alpha(hold)
+            F, J, kinetic = forms.alpha(loads)
             options = {"pc_type": "cholesky"}
         else:
-            F, J, kinetic = forms.conserving(hold)
+            F, J, kinetic = forms.conserving(loads)
             options = {}
         self.solver = SNESSolver.from_config(
             F,
@@ -99,6 +107,7 @@ class DeploymentModel:
         alpha_f = ti.parameters.alpha_f if self.scheme == "alpha" else 0.5
         self.solver.terms += c.contact_terms(model.q, self.bcs, 1.0 - alpha_f, (alpha_f, ti.q_old))
         self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
+        self.root_loads = RootLoads(self)
 
     def restore(self, path: str | Path) -> None:
         """Velocity, acceleration, the stowed state and the director velocity from a checkpoint
@@ -116,6 +125,14 @@ class DeploymentModel:
         self.hold.restore_stowed()
         ti.restart()
 
+    def step_work(self) -> float:
+        """The external loads' work on the tape over the step just solved [J] (collective; before
+        :meth:`advance`): the releasing hold's, and gravity's."""
+        work = self.hold.work()
+        if self._weight_work is not None:
+            work += global_scalar(self._weight_work, self.comm)
+        return work
+
     def advance(self) -> None:
         """After a converged step: the new state, velocities and accelerations become the old."""
         if self.scheme == "conserving":  # before q_old moves on
@@ -124,11 +141,11 @@ class DeploymentModel:
 
     # -- start ----------------------------------------------------------------------------------
     def initial_acceleration(self) -> None:
-        """Translational a_0 from M a_0 = f_hold - f_int(q_0), at rest.
+        """Translational a_0 from M a_0 = f_hold + f_gravity - f_int(q_0), at rest.
 
-        At t = 0 the hold still balances the internal forces, so a_0 is the solver's residual
-        noise; it is computed rather than assumed. The mass matrix at rest (no centripetal term)
-        is solved with a direct solver; the attached root has zero acceleration.
+        At t = 0 the hold still balances the internal forces, so without gravity a_0 is the
+        solver's residual noise; it is computed rather than assumed. The mass matrix at rest (no
+        centripetal term) is solved with a direct solver; the attached root has zero acceleration.
         """
         model, ti = self.model, self.integrator
         M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(self.forms.mass_at_rest()), bcs=self.bcs)
@@ -140,6 +157,11 @@ class DeploymentModel:
         b = internal.x.petsc_vec.copy()
         b.scale(-1.0)
         b.array[self.hold.end_dofs] += self.hold.dead_full
+        if self._weight is not None:
+            weight = dolfinx.fem.Function(model.W)
+            dolfinx.fem.petsc.assemble_vector(weight.x.petsc_vec, self._weight)
+            weight.x.petsc_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            b.axpy(1.0, weight.x.petsc_vec)
         fixed = np.concatenate([bc.dof_indices()[0] for bc in self.bcs])
         owned = b.getLocalSize()
         b.array[fixed[fixed < owned]] = 0.0

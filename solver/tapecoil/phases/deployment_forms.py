@@ -133,6 +133,33 @@ class DeploymentForms:
         """The conserving scheme's director velocity of the converged step (before q_old moves on)."""
         self.director_rate.interpolate(self._new_director_rate)
 
+    def weight(self, gravity):
+        """The virtual work of gravity ``gravity`` (3,) [m/s^2] on the tape, in the direction dq:
+        rho h g . du per unit reference area (symmetric through the thickness: no director term)."""
+        model = self.model
+        du, _ = split_state(model.dq)
+        g = ufl.as_vector([float(c) for c in gravity])
+        return self.translational * ufl.dot(g, du) * model.jacobian * model.dx
+
+    def weight_work(self, gravity):
+        """Gravity's work over a step, from the integrator's previous state to the current one."""
+        model = self.model
+        u_old, _ = split_state(self.integrator.q_old)
+        g = ufl.as_vector([float(c) for c in gravity])
+        return self.translational * ufl.dot(g, model.u - u_old) * model.jacobian * model.dx
+
+    def reaction(self):
+        """The equation of motion at the converged state t_{n+1}, once the integrator has advanced
+        (its velocity and acceleration are those of t_{n+1}): inertia plus internal forces, in the
+        direction dq. On the root's dofs, what the attachment holds: the reaction."""
+        model, ti = self.model, self.integrator
+        du, dtheta = split_state(model.dq)
+        a_u, a_theta = split_state(ti.a_old)
+        _, v_theta = split_state(ti.v_old)
+        Dd, _, d_ddot = director_rates(model, model.theta, v_theta, a_theta)
+        inertia = self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(d_ddot, ufl.dot(Dd, dtheta))
+        return inertia * model.jacobian * model.dx + self.internal
+
     def mass_at_rest(self):
         """The mass form at rest (no centripetal term): translational and rotary inertia."""
         model = self.model

@@ -14,7 +14,8 @@ class DeploymentRows:
     """The rows of a :class:`~tapecoil.phases.deployment.DeploymentModel`'s history.
 
     ``stowed_energy`` is the potential (strain and contact) of the first row, ``external_work``
-    the work of the releasing hold so far; both go into a restart state (:meth:`restart_state`).
+    the work of the loads so far (the releasing hold, gravity); both go into a restart state
+    (:meth:`restart_state`).
     """
 
     def __init__(self, model):
@@ -29,9 +30,9 @@ class DeploymentRows:
         self.external_work = state["external_work"]
         self.stowed_energy = state["stowed_energy"]
 
-    def add_hold_work(self) -> None:
-        """The hold's work over the step just solved (before the model advances)."""
-        self.external_work += self.m.hold.work()
+    def add_step_work(self) -> None:
+        """The loads' work over the step just solved (the hold, gravity; before the model advances)."""
+        self.external_work += self.m.step_work()
 
     def row(self, t: float, step: StepRecord | None) -> dict:
         """The row of the state at time ``t`` reached by ``step`` (None: the release), without
@@ -56,7 +57,7 @@ class DeploymentRows:
             "bending_energy": e["bending"],
             "shear_energy": e["shear"],
             "contact_energy": e["contact"],
-            # the work of the releasing hold on the free end
+            # the work of the loads: the releasing hold on the free end, and gravity
             "external_work": self.external_work,
             # the energy the time integration has removed (numerical dissipation: the model has
             # no physical damping)
@@ -65,4 +66,6 @@ class DeploymentRows:
             "tip_y": tip[1],
             "tip_z": tip[2],
             "max_penetration": m.tape.max_penetration(),
+            # the force [N] and moment [N m] the tape exerts on the hub through its root
+            **m.root_loads(),
         }

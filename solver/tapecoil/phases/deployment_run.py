@@ -18,7 +18,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import Continuation, ContinuationError
-from tapecoil.measures.deployment import deployment_measures
+from tapecoil.measures.deployment import deployment_measures, root_load_peaks
 from tapecoil.phases.deployment import (
     DeploymentModel,
     read_deployment_checkpoint,
@@ -117,7 +117,7 @@ class DeploymentRun(SteppedRun):
             ti.predict(t_to - t_from)
 
         def converged(step, end):
-            self.rows.add_hold_work()
+            self.rows.add_step_work()
             m.advance()
             self.time = step.load
             # a phase that ends here hands over to the next one, which starts afresh
@@ -227,6 +227,8 @@ class DeploymentPhase(Phase):
             "rho_inf": model.rho_inf,
             "scheme": model.scheme,
             "measures": deployment_measures(model.config, history),
+            # the peaks of the force [N], moment and torque [N m] the tape puts on the hub at the root
+            **root_load_peaks(history),
             "run": {
                 "ranks": comm.size,
                 "dofs": global_size(model.model.W),

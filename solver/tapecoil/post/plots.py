@@ -250,6 +250,23 @@ def deployment_energies(directory: Path) -> Path | None:
     return _save(fig, figures / "deployment_energies.png")
 
 
+def deployment_root_loads(directory: Path) -> Path | None:
+    """The force and torque the tape exerts on the hub through its root, against time."""
+    h = read_history(directory / "deployment_history.csv")
+    if h is None or "root_torque" not in h:
+        return None
+    _, _, figures = _setup(directory)
+    t = h["time"]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.0), sharex=True)
+    for axis in ("x", "y", "z"):
+        top.plot(t, h[f"root_force_{axis}"], label=f"F_{axis}")
+    top.plot(t, np.sqrt(sum(h[f"root_force_{a}"] ** 2 for a in "xyz")), "k", lw=0.8, label="|F|")
+    top.set(ylabel="force on the hub [N]", title="root loads on the hub")
+    bottom.plot(t, 1e3 * h["root_torque"], label="torque about the hub axis")
+    bottom.set(xlabel="time [s]", ylabel="torque [N mm]")
+    return _save(fig, figures / "deployment_root_loads.png")
+
+
 FIGURES = (
     coiling_energies,
     coiling_forces,
@@ -257,6 +274,7 @@ FIGURES = (
     coil_profiles,
     deployment_lambda,
     deployment_energies,
+    deployment_root_loads,
 )
 
 

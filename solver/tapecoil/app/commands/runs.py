@@ -41,6 +41,12 @@ def _print_phase(name: str, phase: dict, directory) -> None:
             f"  energy: stowed {e['stowed']:.4g} J, numerically dissipated at most "
             f"{e['largest_dissipated_fraction']:.2%}, largest growth {e['largest_growth_fraction']:.2%}"
         )
+        force, torque = phase.get("root_force_peak"), phase.get("root_torque_peak")
+        if force and torque:
+            echo(
+                f"  root loads on the hub: force up to {force['value']:.4g} N (t = {force['time']:.4g} s), "
+                f"torque up to {1e3 * torque['value']:.4g} N mm (t = {torque['time']:.4g} s)"
+            )
 
 
 def _finish(args: argparse.Namespace, summary: dict, directory) -> int:
