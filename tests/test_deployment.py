@@ -174,7 +174,8 @@ def test_two_ranks_deploy_as_one():
     _, parallel = deploy(coil(config, MPI.COMM_WORLD), config)
     _, serial = deploy(coil(config, MPI.COMM_SELF), config)
     assert len(parallel.history) == len(serial.history)
-    for key in ("kinetic_energy", "strain_energy", "lambda", "tip_x", "tip_z", "dissipated_energy"):
+    keys = ("kinetic_energy", "strain_energy", "lambda", "tip_x", "tip_z", "dissipated_energy")
+    for key in (*keys, "root_force_x", "root_force_z", "root_moment_y", "root_torque"):
         a, b = parallel.history[-1][key], serial.history[-1][key]
         assert a == pytest.approx(b, rel=1e-5, abs=1e-9), key
 

@@ -66,7 +66,7 @@ class RootLoads:
         theta1 = q[nodes.theta_dofs[root, 1]]
         c = self.frame.axis_point[:, None]
         moment = np.zeros(3)
-        for k, e in enumerate(np.eye(3)):
+        for k, e in enumerate(np.eye(3) if len(root) else ()):  # a rank may hold none of the root
             lever = np.cross(e, (x - c).T)  # (n, 3): the rate of x in a rotation about e
             turned = [m.model.angles_of(rotation_matrix(e, s * self.eps) @ d, xi, theta1) for s in (1, -1)]
             rate = (turned[0] - turned[1]).T / (2 * self.eps)
