@@ -32,18 +32,29 @@ def coil(config, comm):
     return model
 
 
-def deploy(coiling, config):
+def deploy(coiling, config, quantity=None):
     """Deploy from ``coiling``'s state with ``config``'s deployment settings; the stowed state
-    (u, theta and the winding angles) is restored afterwards, so that tests can share it."""
+    (u, theta and the winding angles) is restored afterwards, so that tests can share it.
+
+    ``quantity(model)``: a UFL integrand per unit reference area, integrated after every step
+    (the release's row first); then the values come back too, one per history row."""
+    from tapecoil.core.dofs import global_scalar
     from tapecoil.phases.deployment import DeploymentModel
     from tapecoil.phases.deployment_run import DeploymentRun
 
     saved = coiling.model.q.x.array.copy(), coiling.contact.psi.x.array.copy()
     try:
         model = DeploymentModel(coiling.tape, config)
-        run = DeploymentRun(model)
+        values, on_step = [], None
+        if quantity is not None:
+            import dolfinx
+
+            m = model.model
+            form = dolfinx.fem.form(quantity(model) * m.jacobian * m.dx)
+            on_step = lambda _row: values.append(global_scalar(form, m.mesh.comm))  # noqa: E731
+        run = DeploymentRun(model, on_step=on_step)
         run.run()
-        return model, run.result
+        return (model, run.result) if quantity is None else (model, run.result, np.array(values))
     finally:
         coiling.model.q.x.array[:], coiling.contact.psi.x.array[:] = saved
 
@@ -228,37 +239,27 @@ def test_the_root_loads_balance_the_tapes_angular_momentum(stowed_short):
     step: measured 1.1 % (median) and 3.5 % (largest) of the peak torque. At release the root
     torque is the coiling's hub torque (the same state, held), with the opposite sign (the load
     on the hub, against the torque that turned it)."""
-    import dolfinx
     import ufl
 
-    from tapecoil.core.dofs import global_scalar
-    from tapecoil.phases.deployment import DeploymentModel
     from tapecoil.phases.deployment_forms import director_rates
-    from tapecoil.phases.deployment_run import DeploymentRun
     from tapecoil.phases.release import split_state
 
     config = short_stowed_config(t_end=0.008)
     hub_torque = stowed_short.hub_torque()
-    saved = stowed_short.model.q.x.array.copy(), stowed_short.contact.psi.x.array.copy()
-    try:
-        model = DeploymentModel(stowed_short.tape, config)
+
+    def angular_momentum(model):
         m, ti, tp, frame = model.model, model.integrator, config.tape, model.tape.frame
         v_u, v_theta = split_state(ti.v_old)
         _, d_dot, _ = director_rates(m, m.theta, v_theta)
         arm = m.phi - ufl.as_vector(frame.axis_point)
         spin = tp.density * tp.h * ufl.cross(arm, v_u) + tp.density * tp.h**3 / 12 * ufl.cross(m.d, d_dot)
-        momentum = dolfinx.fem.form(ufl.dot(ufl.as_vector(frame.axis), spin) * m.jacobian * m.dx)
-        rows = []
-        run = DeploymentRun(
-            model, on_step=lambda row: rows.append((row, global_scalar(momentum, m.mesh.comm)))
-        )
-        run.run()
-    finally:
-        stowed_short.model.q.x.array[:], stowed_short.contact.psi.x.array[:] = saved
-    assert run.result.history[0]["root_torque"] == pytest.approx(-hub_torque, rel=1e-9)
-    t = np.array([row["time"] for row, _ in rows])
-    H = np.array([h for _, h in rows])
-    tau = np.array([row["root_torque"] for row, _ in rows])[1:-1]
+        return ufl.dot(ufl.as_vector(frame.axis), spin)
+
+    _, result, H = deploy(stowed_short, config, angular_momentum)
+    history = result.history
+    assert history[0]["root_torque"] == pytest.approx(-hub_torque, rel=1e-9)
+    t = np.array([row["time"] for row in history])
+    tau = np.array([row["root_torque"] for row in history])[1:-1]
     rate = (H[2:] - H[:-2]) / (t[2:] - t[:-2])
     released = t[1:-1] > 1.5 * config.deployment.release_time
     scale = np.abs(tau[released]).max()
@@ -275,40 +276,23 @@ def test_gravity_is_carried_by_the_root(stowed_short):
     1.8 % of the weight over the steps' median, 6.2 % at most; over these 8 ms the root carries
     a third to a half of the weight, the rest accelerates the tape). The energy account takes
     gravity's work: no energy is created."""
-    import dolfinx
-
-    from tapecoil.core.dofs import global_scalar
-    from tapecoil.phases.deployment import DeploymentModel
-    from tapecoil.phases.deployment_run import DeploymentRun
-
     g = -9.81
     config = short_stowed_config(t_end=0.008)
     config = dataclasses.replace(
         config, deployment=dataclasses.replace(config.deployment, gravity=[0.0, g, 0.0])
     )
-    saved = stowed_short.model.q.x.array.copy(), stowed_short.contact.psi.x.array.copy()
-    try:
-        model = DeploymentModel(stowed_short.tape, config)
-        m, ti, tp = model.model, model.integrator, config.tape
-        mass = global_scalar(dolfinx.fem.form(tp.density * tp.h * m.jacobian * m.dx), m.mesh.comm)
-        momentum = dolfinx.fem.form(tp.density * tp.h * ti.v_old[1] * m.jacobian * m.dx)
-        rows = []
-        run = DeploymentRun(
-            model, on_step=lambda row: rows.append((row, global_scalar(momentum, m.mesh.comm)))
-        )
-        run.run()
-    finally:
-        stowed_short.model.q.x.array[:], stowed_short.contact.psi.x.array[:] = saved
-    assert mass == pytest.approx(tp.rho_l * tp.L, rel=1e-6)  # rho h over the area: the mass per length
-    t = np.array([row["time"] for row, _ in rows])
-    P = np.array([p for _, p in rows])
-    force = np.array([row["root_force_y"] for row, _ in rows])[1:-1]
+    tp = config.tape
+    _, run_result, P = deploy(stowed_short, config, lambda m: tp.density * tp.h * m.integrator.v_old[1])
+    mass = tp.rho_l * tp.L  # rho h over the reference area
+    history = run_result.history
+    t = np.array([row["time"] for row in history])
+    force = np.array([row["root_force_y"] for row in history])[1:-1]
     rate = (P[2:] - P[:-2]) / (t[2:] - t[:-2])
     released = t[1:-1] > 1.5 * config.deployment.release_time
     weight = abs(mass * g)
     mismatch = np.abs(force[released] - (mass * g - rate[released])) / weight
     assert np.median(mismatch) < 0.03 and mismatch.max() < 0.1
-    h = run.result.history
+    h = history
     stowed = h[0]["strain_energy"] + h[0]["contact_energy"]
     dissipated = np.array([r["dissipated_energy"] for r in h])
     assert dissipated.min() > -1e-3 * stowed and dissipated.max() < 0.02 * stowed
