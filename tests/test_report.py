@@ -44,6 +44,7 @@ EXPECTED = (
     "coil_profiles",
     "deployment_lambda",
     "deployment_energies",
+    "deployment_root_loads",
     "coiling_sequence",
     "stowed",
     "deployment_sequence",

@@ -32,6 +32,8 @@ CAPTIONS = {
     "modified ODE from the simulation's own lambda0, with mu and with the coil's plate energy.",
     "deployment_energies": "Energy balance of the deployment: what the time integration dissipates is "
     "the remainder.",
+    "deployment_root_loads": "The force and torque the tape exerts on the hub through its root, the "
+    "attachment's reaction: what the hub and the spacecraft interface carry.",
     "coiling_sequence": "Coiling, four snapshots; colour: longitudinal curvature times R.",
     "stowed": "The stowed coil after the last step.",
     "deployment_sequence": "Deployment, four snapshots.",
