@@ -138,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
     ours, petsc = split_petsc_options(argv, _known_options(parser))
     args = parser.parse_args(ours)
     take_back = hand_to_petsc(petsc)
-    # a ConfigWarning is printed as one line where it is issued; Python's display would repeat it
+    # a ConfigWarning is printed as one line where it is raised; Python's display would repeat it
     shown_as, warnings.formatwarning = warnings.formatwarning, _format_warning
     try:
         return args.func(args)

@@ -1,4 +1,5 @@
-"""Distributed dof bookkeeping: owned sizes, global sums and norms, node and cell values.
+"""Distributed dof bookkeeping: owned sizes, global sums and norms, node and cell values,
+vectors assembled with their ghosts' contributions.
 
 Every function here is collective where it says so and rank-local otherwise; none assumes that
 any rank owns any particular dof.
@@ -50,6 +51,19 @@ def owned_subspace_dofs(V, sub: tuple[int, ...], dim: int, entities: np.ndarray)
     return dofs[dofs < owned_size(V)]
 
 
+def at_node(point):
+    """A marker for ``locate_dofs_geometrical``: the parameter points at ``point`` (x, y), to
+    1e-10 of its size."""
+    p = np.asarray(point, dtype=float)
+
+    def marker(x):
+        return np.isclose(x[0], p[0], atol=1e-10 * (1 + abs(p[0]))) & np.isclose(
+            x[1], p[1], atol=1e-10 * (1 + abs(p[1]))
+        )
+
+    return marker
+
+
 def owned_node_dofs(V, sub: tuple[int, ...], point) -> np.ndarray:
     """Owned dofs of the (sub-)space ``V.sub(i).sub(j)...`` at the node at ``point`` (rank-local).
 
@@ -59,15 +73,17 @@ def owned_node_dofs(V, sub: tuple[int, ...], point) -> np.ndarray:
     for i in sub:
         space = space.sub(i)
     collapsed, _ = space.collapse()
-    p = np.asarray(point, dtype=float)
-
-    def at_point(x):
-        return np.isclose(x[0], p[0], atol=1e-10 * (1 + abs(p[0]))) & np.isclose(
-            x[1], p[1], atol=1e-10 * (1 + abs(p[1]))
-        )
-
-    dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_point)[0]
+    dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_node(point))[0]
     return dofs[dofs < owned_size(V)]
+
+
+def assemble_into(function, form) -> np.ndarray:
+    """Assemble the compiled vector ``form`` into the Function ``function`` from zero, the ghosts'
+    contributions added to their owners (collective); returns its local array."""
+    function.x.array[:] = 0.0
+    dolfinx.fem.assemble_vector(function.x.array, form)
+    function.x.scatter_reverse(dolfinx.la.InsertMode.add)
+    return function.x.array
 
 
 def node_value(q, sub: tuple[int, ...], point) -> float:

@@ -10,6 +10,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
+from tapecoil.core.dofs import at_node
 from tapecoil.models.edges import facet_condition
 
 AXES = "xyz"
@@ -63,17 +64,10 @@ def fixed_point(model, point, directions: str = "xyz") -> list:
     (parameter coordinates); the node's existence is the caller's to check."""
     if not directions or any(c not in AXES for c in directions):
         raise ValueError(f"fix_point: directions {directions!r} must be made of x, y and z")
-    p = np.asarray(point, dtype=float)
-
-    def at_point(x):
-        return np.isclose(x[0], p[0], atol=1e-10 * (1 + abs(p[0]))) & np.isclose(
-            x[1], p[1], atol=1e-10 * (1 + abs(p[1]))
-        )
-
     bcs = []
     for c in directions:
         space = model.W.sub(0).sub(AXES.index(c))
         collapsed, _ = space.collapse()
-        dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_point)
+        dofs = dolfinx.fem.locate_dofs_geometrical((space, collapsed), at_node(point))
         bcs.append(dolfinx.fem.dirichletbc(dolfinx.fem.Function(collapsed), dofs, space))
     return bcs

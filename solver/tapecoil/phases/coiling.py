@@ -37,7 +37,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import global_scalar
+from tapecoil.core.dofs import assemble_into, global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
 from tapecoil.models.edges import facet_condition
@@ -145,12 +145,9 @@ class CoilingModel:
             self._reaction_vector = dolfinx.fem.Function(self.model.W)
             self._end_dofs = self.tape.edge_dofs(FREE_END, (0, 0))
             self._root_dofs = [self.tape.edge_dofs(ROOT, (0, i)) for i in range(3)]
-        b = self._reaction_vector.x
-        b.array[:] = 0.0
-        dolfinx.fem.assemble_vector(b.array, self._reaction_form)
-        b.scatter_reverse(dolfinx.la.InsertMode.add)
+        assemble_into(self._reaction_vector, self._reaction_form)
         self.tape.add_self_contact_force(self._reaction_vector)
-        return b.array
+        return self._reaction_vector.x.array
 
     def hub_torque(self, internal_force: np.ndarray | None = None, eps: float = 1e-6) -> float:
         """The torque the tape exerts on the hub through the root's reactions [N m] (collective).

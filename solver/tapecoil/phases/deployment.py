@@ -28,7 +28,7 @@ from petsc4py import PETSc
 from tapecoil.config import Config
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import global_scalar
+from tapecoil.core.dofs import assemble_into, global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
@@ -151,16 +151,14 @@ class DeploymentModel:
         M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(self.forms.mass_at_rest()), bcs=self.bcs)
         M.assemble()
         internal = dolfinx.fem.Function(model.W)
-        dolfinx.fem.petsc.assemble_vector(internal.x.petsc_vec, dolfinx.fem.form(self.forms.internal))
-        internal.x.petsc_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        assemble_into(internal, dolfinx.fem.form(self.forms.internal))
         self.tape.add_self_contact_force(internal)
         b = internal.x.petsc_vec.copy()
         b.scale(-1.0)
         b.array[self.hold.end_dofs] += self.hold.dead_full
         if self._weight is not None:
             weight = dolfinx.fem.Function(model.W)
-            dolfinx.fem.petsc.assemble_vector(weight.x.petsc_vec, self._weight)
-            weight.x.petsc_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            assemble_into(weight, self._weight)
             b.axpy(1.0, weight.x.petsc_vec)
         fixed = np.concatenate([bc.dof_indices()[0] for bc in self.bcs])
         owned = b.getLocalSize()

@@ -14,7 +14,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
-from tapecoil.core.dofs import owned_size
+from tapecoil.core.dofs import assemble_into, owned_size
 from tapecoil.core.newton import PointForce
 from tapecoil.core.smoothing import smoothstep
 from tapecoil.geometry.meshes import FREE_END
@@ -66,10 +66,7 @@ class EndHold:
 
     def end_internal_force(self) -> np.ndarray:
         """f_int(q) on the free end's owned dofs: in the stowed state, what the pull and guide held."""
-        internal = dolfinx.fem.Function(self.model.W)
-        dolfinx.fem.assemble_vector(internal.x.array, self._internal)
-        internal.x.scatter_reverse(dolfinx.la.InsertMode.add)
-        return internal.x.array[self.end_dofs].copy()
+        return assemble_into(dolfinx.fem.Function(self.model.W), self._internal)[self.end_dofs].copy()
 
     def restore_stowed(self) -> None:
         """The dead forces of the stowed state, after ``stowed`` was read back (a restart)."""
@@ -103,10 +100,7 @@ class EndHold:
         Its force at the level where the scheme applies it (state q_f, hold factor of that time:
         what the residual holds) dotted with the step.
         """
-        f = dolfinx.fem.Function(self.model.W)
-        dolfinx.fem.assemble_vector(f.x.array, self._compiled)
-        f.x.scatter_reverse(dolfinx.la.InsertMode.add)
-        force = -f.x.array
+        force = -assemble_into(dolfinx.fem.Function(self.model.W), self._compiled)
         force[self.end_dofs] += self.dead.value
         n = owned_size(self.model.W)
         dq = self.model.q.x.array[:n] - self.integrator.q_old.x.array[:n]

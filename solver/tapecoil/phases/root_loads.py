@@ -20,11 +20,10 @@ sense.
 from __future__ import annotations
 
 import dolfinx
-import dolfinx.fem.petsc
 import numpy as np
 from mpi4py import MPI
-from petsc4py import PETSc
 
+from tapecoil.core.dofs import assemble_into
 from tapecoil.core.rotation import rotation_matrix
 
 COMPONENTS = ("x", "y", "z")
@@ -51,11 +50,7 @@ class RootLoads:
 
     def __call__(self) -> dict[str, float]:
         m = self.m
-        vec = self.reaction.x.petsc_vec
-        with vec.localForm() as local:
-            local.set(0.0)
-        dolfinx.fem.petsc.assemble_vector(vec, self.form)
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        assemble_into(self.reaction, self.form)
         m.tape.add_self_contact_force(self.reaction)
         f, q, nodes, root = self.reaction.x.array, m.model.q.x.array, self.nodes, self.root
         f_u = f[nodes.u_dofs[root]]  # (n, 3): the attachment's force on the tape at each node
