@@ -183,3 +183,42 @@ def test_continuation_stops_with_the_last_converged_state():
     assert load["t"] == pytest.approx(0.5)
     # 0.6 fails, the halved step reaches 0.5; beyond it three cut-backs fail and it stops
     assert [round(s.load, 6) for s in run.history] == [0.2, 0.4, 0.5]
+
+
+def test_error_controlled_steps_meet_their_tolerance():
+    """With an error estimate, steps whose error exceeds the tolerance are repeated shorter,
+    and the accepted ones settle where the error is just below it.
+
+    The estimate here is (step / 0.05)^2, as for a second-order integrator; the first step of
+    0.2 is 16 times the tolerance and is rejected.
+    """
+    from types import SimpleNamespace
+
+    from tapecoil.config import StepControl
+    from tapecoil.core.stepping import Continuation
+
+    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)))
+    load = {"t": 0.0, "from": 0.0}
+
+    def solve():
+        state.x.array[:] = load["t"]
+        return SimpleNamespace(converged=True, iterations=2)
+
+    def set_load(t):
+        load["from"], load["t"] = state.x.array[0], t
+
+    control = StepControl(
+        initial_step=0.2, max_step=1.0, min_step=1e-6, grow=1.5, cutback=0.5, max_cutbacks=3
+    )
+
+    def error():
+        return ((load["t"] - load["from"]) / 0.05) ** 2
+
+    run = Continuation(solve, set_load, state, control, error=error)
+    history = run.run(0.0, 1.0)
+    assert history[0].rejected == 1 and sum(r.rejected for r in history) == 1
+    assert all(r.error <= 1.0 for r in history)
+    # between 0.9 of the tolerance (where the controller aims) and the tolerance, but for the
+    # last step, shortened to land on the end
+    assert all(0.9 * 0.05 - 1e-12 <= r.step <= 0.05 for r in history[:-1])
+    assert history[-1].load == pytest.approx(1.0)

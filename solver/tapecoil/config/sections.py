@@ -252,7 +252,13 @@ class DeploymentConfig:
     Attributes:
         t_end: simulated time [s].
         dt: initial time step [s].
-        max_dt: largest time step [s] (steps grow from dt after easy steps).
+        max_dt: largest time step [s]: a safety bound; the steps themselves are chosen by
+            error_tolerance.
+        error_tolerance: accuracy of a time step [-], in [0, 1): its estimated local error in
+            the displacement (Zienkiewicz and Xie's estimate for the Newmark family) as a
+            fraction of the step's own displacement; a step above it is repeated shorter, and
+            the next step is sized to it. 0 leaves the steps to Newton alone (they grow after
+            easy solves, up to max_dt).
         release_time: time over which the hold on the free end (pull and guide) is released [s].
         rho_inf: high-frequency spectral radius of generalized-alpha [-]; 1 is trapezoidal Newmark.
         lambda_end: deployed fraction at which the run stops early [-].
@@ -267,6 +273,7 @@ class DeploymentConfig:
     t_end: float = param(0.6, "s", POSITIVE)
     dt: float = param(1e-4, "s", POSITIVE)
     max_dt: float = param(1e-3, "s", POSITIVE)
+    error_tolerance: float = param(0.0, "-", Range(0.0, 1.0, False, True))
     release_time: float = param(2e-3, "s", NON_NEGATIVE)
     rho_inf: float = param(0.5, "-", Range(0.0, 1.0))
     lambda_end: float = param(1.0, "-", Range(0.0, 1.0, True))

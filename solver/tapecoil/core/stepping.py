@@ -8,6 +8,14 @@ one: a viscous term c (q - q_prev) is added and a sequence of pseudo-time solves
 target load lets the state fall through the instability (a snap) to the next stable branch,
 where a plain Newton solve finishes. If that fails too, the run stops with
 :class:`ContinuationError`; the state is then the last converged one.
+
+With an ``error`` estimate (time stepping), a converged step is also judged on its accuracy:
+``error()`` returns the step's estimated local error over what the caller tolerates (1 is the
+tolerance). A step above 1 is rejected and retried shorter; an accepted one sets the next
+step from the estimate, dt_next = dt min(grow, max(1/5, 0.9 error^(-1/2))): the exponent 1/2
+is that of an error O(dt^3) measured against the step's increment O(dt) (a second-order
+integrator). Growth also waits for an easy Newton solve, since a step that converges with
+difficulty would, longer, not converge at all.
 """
 
 from __future__ import annotations
@@ -40,6 +48,8 @@ class StepRecord:
     relaxed: bool
     wall_time: float
     next_step: float = 0.0
+    error: float | None = None  # the accuracy estimate over its tolerance (error-controlled steps)
+    rejected: int = 0  # converged attempts rejected as inaccurate before this one
 
 
 @dataclass
@@ -70,6 +80,8 @@ class Continuation:
     on_step: Callable[[StepRecord], None] | None = None
     # predict(t_from, t_to): an initial guess for the solve at t_to from the converged state at t_from
     predict: Callable[[float, float], None] | None = None
+    # error(): the converged step's local error over its tolerance (None: steps by Newton alone)
+    error: Callable[[], float] | None = None
     easy_iterations: int = 5
     history: list[StepRecord] = field(default_factory=list)
 
@@ -111,6 +123,12 @@ class Continuation:
             relax.coefficient.value = 0.0
         return False, total
 
+    def _error_factor(self, error: float) -> float:
+        """The factor on the step that brings ``error`` (over its tolerance) to 0.9, within [1/5, grow]."""
+        if error <= 0.0:
+            return self.control.grow
+        return min(self.control.grow, max(0.2, 0.9 * error**-0.5))
+
     def run(
         self, t_start: float, t_end: float, stops: tuple[float, ...] = (), first_step: float | None = None
     ) -> list[StepRecord]:
@@ -128,7 +146,7 @@ class Continuation:
         t = t_start
         dt = ctl.initial_step * span if first_step is None else first_step
         saved = self.state.x.array.copy()
-        cutbacks = 0
+        cutbacks = rejected = 0
         while marks:
             target = t + dt
             if (target - marks[0]) * math.copysign(1, span) >= -1e-12 * abs(span):
@@ -163,18 +181,33 @@ class Continuation:
                     )
                 relaxed = True
             step = target - t
+            error = None if (self.error is None or relaxed) else self.error()
+            if error is not None and error > 1.0 and abs(step) > ctl.min_step * abs(span):
+                self.state.x.array[:] = saved
+                rejected += 1
+                dt = step * max(ctl.min_step * abs(span) / abs(step), self._error_factor(error))
+                continue
             if target == marks[0]:
                 marks.pop(0)
             t = target
             saved[:] = self.state.x.array
-            if iterations <= self.easy_iterations and cutbacks == 0:
-                dt *= ctl.grow
+            easy = iterations <= self.easy_iterations and cutbacks == 0
+            if error is None:
+                if easy:
+                    dt *= ctl.grow
+            elif abs(step) < abs(dt) * (1 - 1e-9):
+                # shortened to land on a stop: its error says too little to grow the next step by
+                dt *= min(self._error_factor(error), 1.0)
+            else:
+                dt = step * (self._error_factor(error) if easy else min(self._error_factor(error), 1.0))
             dt = math.copysign(min(abs(dt), ctl.max_step * abs(span)), span)
             if relaxed:  # restart gently after a snap
                 dt = ctl.initial_step * span
-            record = StepRecord(target, step, iterations, cutbacks, relaxed, time.perf_counter() - t0, dt)
+            record = StepRecord(
+                target, step, iterations, cutbacks, relaxed, time.perf_counter() - t0, dt, error, rejected
+            )
             self.history.append(record)
-            cutbacks = 0
+            cutbacks = rejected = 0
             if self.on_step is not None:
                 self.on_step(record)
         return self.history

@@ -28,7 +28,7 @@ from petsc4py import PETSc
 from tapecoil.config import Config
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import assemble_into, global_scalar
+from tapecoil.core.dofs import assemble_into, global_scalar, owned_size
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
@@ -108,6 +108,8 @@ class DeploymentModel:
         self.solver.terms += c.contact_terms(model.q, self.bcs, 1.0 - alpha_f, (alpha_f, ti.q_old))
         self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
         self.root_loads = RootLoads(self)
+        u_dofs = c.contact.nodes.u_dofs.ravel()
+        self._owned_u_dofs = np.unique(u_dofs[u_dofs < owned_size(model.W)])
 
     def restore(self, path: str | Path) -> None:
         """Velocity, acceleration, the stowed state and the director velocity from a checkpoint
@@ -132,6 +134,24 @@ class DeploymentModel:
         if self._weight_work is not None:
             work += global_scalar(self._weight_work, self.comm)
         return work
+
+    def step_error(self) -> float:
+        """The step's local error in the displacement over its tolerance (collective; before
+        :meth:`advance`); at most 1 is accurate enough.
+
+        The local error e (:meth:`GeneralizedAlpha.local_error`) of the translational dofs, in
+        the root mean square over the nodes, against ``deployment.error_tolerance`` times the
+        step's own displacement, or times the thickness h while the tape barely moves (at
+        release). The director angles are left out: they follow the displacement's gradient.
+        """
+        tol = self.config.deployment.error_tolerance
+        dofs = self._owned_u_dofs
+        error = self.integrator.local_error()[dofs]
+        increment = self.model.q.x.array[dofs] - self.integrator.q_old.x.array[dofs]
+        sums = self.comm.allreduce(np.array([error @ error, increment @ increment, dofs.size]))
+        count = max(sums[2], 1.0)
+        rms_error, rms_increment = np.sqrt(sums[0] / count), np.sqrt(sums[1] / count)
+        return float(rms_error / (tol * (rms_increment + self.config.tape.h)))
 
     def advance(self) -> None:
         """After a converged step: the new state, velocities and accelerations become the old."""

@@ -49,6 +49,10 @@ class DeploymentRows:
             "step": step.step if step else 0.0,
             "newton_iterations": step.iterations if step else 0,
             "cutbacks": step.cutbacks if step else 0,
+            # the step's local error over its tolerance (0 without error control), and the
+            # converged attempts rejected as inaccurate before it
+            "step_error": step.error if step and step.error is not None else 0.0,
+            "rejected_steps": step.rejected if step else 0,
             "lambda": lift["lambda"],
             "coiled_length": lift["coiled_length"],
             "kinetic_energy": e["kinetic"],

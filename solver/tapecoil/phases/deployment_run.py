@@ -44,10 +44,12 @@ class _Deployed(Exception):
 class DeploymentRun(SteppedRun):
     """Time stepping from release to ``deployment.lambda_end`` (or ``deployment.t_end``).
 
-    Steps start at ``deployment.dt`` and grow by ``solver.grow`` after easy steps up to
-    ``max_dt``; a step that fails is cut back (``solver.cutback``, ``solver.max_cutbacks``),
-    as in the load stepping. ``on_step(row)`` is called on every rank after each step with its
-    row (:class:`~tapecoil.phases.deployment_rows.DeploymentRows`).
+    Steps start at ``deployment.dt`` and, with ``deployment.error_tolerance`` set, are sized
+    by their estimated local error (:meth:`DeploymentModel.step_error`); they grow by at most
+    ``solver.grow`` and only after easy solves, up to ``max_dt``; a step that fails is cut
+    back (``solver.cutback``, ``solver.max_cutbacks``), as in the load stepping.
+    ``on_step(row)`` is called on every rank after each step with its row
+    (:class:`~tapecoil.phases.deployment_rows.DeploymentRows`).
     """
 
     # the step grows after steps of at most this many Newton iterations: on the first 20 ms of
@@ -144,6 +146,7 @@ class DeploymentRun(SteppedRun):
                     m.model.q,
                     control(max_dt, end - self.time),
                     predict=predict,
+                    error=m.step_error if d.error_tolerance > 0 else None,
                     easy_iterations=self.easy_iterations,
                 )
                 cont.on_step = lambda step, end=end: converged(step, end)
@@ -238,6 +241,7 @@ class DeploymentPhase(Phase):
                 # this process's, including the attempts that failed and were cut back
                 "newton_iterations_total": int(model.solver.timings["iterations"]),
                 "cutbacks": int(sum(r["cutbacks"] for r in steps)),
+                "rejected_steps": int(sum(r["rejected_steps"] for r in steps)),
                 "smallest_step": min((r["step"] for r in steps), default=0.0),
                 "largest_step": max((r["step"] for r in steps), default=0.0),
                 "max_penetration": max(r["max_penetration"] for r in history),
