@@ -102,6 +102,13 @@ def deployment_measures(config, history: list[dict]) -> dict:
             "final_dissipated_fraction": float(dissipated[-1] / stowed),
             "largest_growth_fraction": largest_growth,
             "final_kinetic_fraction": history[-1]["kinetic_energy"] / stowed,
+            # the remainder's parts at the end (docs/deployment.md): the scheme's dissipation,
+            # the converged residual's work and the contact updates' change of energy
+            **{
+                f"final_{key}_fraction": history[-1][key] / stowed
+                for key in ("scheme_dissipation", "residual_work", "contact_update_energy")
+                if key in history[-1]
+            },
         },
         "dissipated_energy": Measure(
             "numerically dissipated energy, largest / stowed energy [-]",

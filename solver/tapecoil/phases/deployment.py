@@ -135,6 +135,13 @@ class DeploymentModel:
             work += global_scalar(self._weight_work, self.comm)
         return work
 
+    def residual_work(self) -> float:
+        """The converged residual's work over the step just solved [J] (collective; before
+        :meth:`advance`): what the Newton tolerance leaves in the step's energy balance."""
+        n = owned_size(self.model.W)
+        step = self.model.q.x.array[:n] - self.integrator.q_old.x.array[:n]
+        return self.comm.allreduce(float(np.dot(self.solver.b.array[:n], step)), op=MPI.SUM)
+
     def step_error(self) -> float:
         """The step's local error in the displacement over its tolerance (collective; before
         :meth:`advance`); at most 1 is accurate enough.
@@ -216,10 +223,16 @@ class DeploymentModel:
         """The coiled length and the deployed fraction lambda (:func:`measures.deployment.lift_off`)."""
         return lift_off(self.tape, self.lift_off_gap)
 
-    def update(self) -> None:
-        """After a converged step: winding angles from the new state (the hub stays put)."""
+    def update(self) -> float:
+        """After a converged step: winding angles from the new state (the hub stays put).
+
+        Returns the change of the contact energy the update makes [J] (collective): the
+        obstacle between the turns follows the winding angles, which move only between steps.
+        """
+        before = self.tape.energies()["contact"]
         self.contact.update(self.hub_angle)
         self.tape.accept_state()
+        return self.tape.energies()["contact"] - before
 
 
 def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: dict) -> None:

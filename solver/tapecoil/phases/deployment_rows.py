@@ -1,8 +1,16 @@
 """What a step of the deployment measured: its history row, and the energy account it closes.
 
 The model has no physical damping, so what the stowed energy and the release's work do not
-account for in strain, contact and kinetic energy is the time integration's numerical
-dissipation; :class:`DeploymentRows` keeps that account from step to step.
+account for in strain, contact and kinetic energy is what the computation lost. Two parts of it
+are not the time integration: the converged residual's work (the Newton tolerance) and the
+contact energy the update of the winding angles adds between steps (the obstacle between the
+turns follows them). With F(q) = r the residual of a step, inertia and averaged forces times
+the step give the kinetic and potential energies' change plus the scheme's dissipation D, so
+
+    stowed + work - potential - kinetic = sum (D - r . dq - update's change),
+
+and the scheme's own dissipation is the remainder plus the residual's work plus the
+updates'. :class:`DeploymentRows` keeps these accounts from step to step.
 """
 
 from __future__ import annotations
@@ -22,17 +30,33 @@ class DeploymentRows:
         self.m = model
         self.stowed_energy = None
         self.external_work = 0.0
+        self.residual_work = 0.0
+        self.update_energy = 0.0
 
     def restart_state(self) -> dict:
-        return {"external_work": self.external_work, "stowed_energy": self.stowed_energy}
+        return {
+            "external_work": self.external_work,
+            "stowed_energy": self.stowed_energy,
+            "residual_work": self.residual_work,
+            "update_energy": self.update_energy,
+        }
 
     def restore(self, state: dict) -> None:
         self.external_work = state["external_work"]
         self.stowed_energy = state["stowed_energy"]
+        # checkpoints written before these accounts were kept start them at the restart
+        self.residual_work = state.get("residual_work", 0.0)
+        self.update_energy = state.get("update_energy", 0.0)
 
     def add_step_work(self) -> None:
-        """The loads' work over the step just solved (the hold, gravity; before the model advances)."""
+        """The loads' and the converged residual's work over the step just solved (the hold,
+        gravity; before the model advances)."""
         self.external_work += self.m.step_work()
+        self.residual_work += self.m.residual_work()
+
+    def add_update_energy(self, change: float) -> None:
+        """The contact energy's change by the update after a step (:meth:`DeploymentModel.update`)."""
+        self.update_energy += change
 
     def row(self, t: float, step: StepRecord | None) -> dict:
         """The row of the state at time ``t`` reached by ``step`` (None: the release), without
@@ -44,6 +68,7 @@ class DeploymentRows:
             self.stowed_energy = potential
         lift = m.lift_off()
         tip = m.tip()
+        dissipated = self.stowed_energy + self.external_work - potential - e["kinetic"]
         return {
             "time": t,
             "step": step.step if step else 0.0,
@@ -63,9 +88,13 @@ class DeploymentRows:
             "contact_energy": e["contact"],
             # the work of the loads: the releasing hold on the free end, and gravity
             "external_work": self.external_work,
-            # the energy the time integration has removed (numerical dissipation: the model has
-            # no physical damping)
-            "dissipated_energy": self.stowed_energy + self.external_work - potential - e["kinetic"],
+            # what the energy balance misses (the model has no physical damping): the time
+            # integration's dissipation, less the residual's work and the contact updates'
+            "dissipated_energy": dissipated,
+            "residual_work": self.residual_work,
+            "contact_update_energy": self.update_energy,
+            # the scheme's own numerical dissipation
+            "scheme_dissipation": dissipated + self.residual_work + self.update_energy,
             "tip_x": tip[0],
             "tip_y": tip[1],
             "tip_z": tip[2],

@@ -124,7 +124,7 @@ class DeploymentRun(SteppedRun):
             self.time = step.load
             # a phase that ends here hands over to the next one, which starts afresh
             self.next_step = step.next_step if step.load < end else None
-            m.update()
+            self.rows.add_update_energy(m.update())
             row = self._record(self.rows.row(step.load, step))
             check_penetration(row["max_penetration"], m.config, step.load, f"t = {step.load:.6g} s")
             if row["lambda"] >= d.lambda_end:

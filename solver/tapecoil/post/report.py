@@ -30,8 +30,9 @@ CAPTIONS = {
     "across the width, against plate theory (physics.md Sec. 4).",
     "deployment_lambda": "Deployed fraction against Seffen and Pellegrino's law (Eq. 2.20) and the "
     "modified ODE from the simulation's own lambda0, with mu and with the coil's plate energy.",
-    "deployment_energies": "Energy balance of the deployment: what the time integration dissipates is "
-    "the remainder.",
+    "deployment_energies": "Energy balance of the deployment. The remainder is the scheme's numerical "
+    "dissipation less the contact energy the winding angles' update adds between steps (and the "
+    "converged residual's work, negligible).",
     "deployment_root_loads": "The force and torque the tape exerts on the hub through its root, the "
     "attachment's reaction: what the hub and the spacecraft interface carry.",
     "coiling_sequence": "Coiling, four snapshots; colour: longitudinal curvature times R.",
