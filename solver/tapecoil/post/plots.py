@@ -110,6 +110,11 @@ def coiling_forces(directory: Path) -> Path | None:
     ax[0].plot(angle, h["coiling_tension"], label="coiling tension T - N (axial force N into the root)")
     eq26 = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, r_hub)
     ax[0].axhline(eq26, color="k", ls="--", lw=1, label=f"Eq. 2.6, r_c = r_hub: {eq26:.3f} N")
+    if "coiled_length" in h:
+        growing = theory.coiling_tension_growing(
+            1.0 - h["coiled_length"] / tp.L, tp.D, tp.alpha, tp.R, r_hub, tp.h, tp.L
+        )
+        ax[0].plot(angle, growing["bending"], "k:", label="Eq. 4.5, the coil's radius r(lambda)")
     ax[0].set(xlabel="hub angle [rad]", ylabel="force [N]", title="tension")
     rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
     steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
