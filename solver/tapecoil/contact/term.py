@@ -15,6 +15,7 @@ from petsc4py import PETSc
 
 from tapecoil.contact.projection import CandidateSearch
 from tapecoil.contact.self_contact import ContactPairs, SelfContact
+from tapecoil.core.dofs import owned_constrained_dofs
 
 
 class PairsAtState:
@@ -57,9 +58,7 @@ class SelfContactTerm:
         self.contact, self.q = contact, q
         comm = contact.comm
         W_map, bs = q.function_space.dofmap.index_map, q.function_space.dofmap.index_map_bs
-        constrained = [bc.dof_indices()[0] for bc in bcs]
-        local = np.concatenate(constrained) if constrained else np.zeros(0, np.int32)
-        owned = local[local < W_map.size_local * bs]
+        owned = owned_constrained_dofs(q.function_space, bcs)
         glob = W_map.local_to_global((owned // bs).astype(np.int32)) * bs + owned % bs
         fixed = np.unique(np.concatenate(comm.allgather(glob)))
         self.dofs = np.where(np.isin(contact.u_dofs, fixed), -1, contact.u_dofs).astype(PETSc.IntType)

@@ -32,10 +32,24 @@ def global_scalar(form, comm) -> float:
     return comm.allreduce(dolfinx.fem.assemble_scalar(compiled), op=MPI.SUM)
 
 
+def global_dot(V, a: np.ndarray, b: np.ndarray) -> float:
+    """Dot product over all ranks of the owned parts of two local dof arrays of the space V
+    (collective)."""
+    n = owned_size(V)
+    return V.mesh.comm.allreduce(float(np.dot(a[:n], b[:n])), op=MPI.SUM)
+
+
 def global_norm(V, local_values: np.ndarray) -> float:
     """Euclidean norm over all ranks of the owned part of a local dof array of the space V."""
-    n = owned_size(V)
-    return math.sqrt(V.mesh.comm.allreduce(float(np.dot(local_values[:n], local_values[:n]))))
+    return math.sqrt(global_dot(V, local_values, local_values))
+
+
+def owned_constrained_dofs(V, bcs) -> np.ndarray:
+    """The owned dofs of V that the Dirichlet conditions ``bcs`` hold, local indices in the
+    conditions' order (rank-local)."""
+    local = [bc.dof_indices()[0] for bc in bcs]
+    dofs = np.concatenate(local) if local else np.zeros(0, np.int32)
+    return dofs[dofs < owned_size(V)]
 
 
 def owned_subspace_dofs(V, sub: tuple[int, ...], dim: int, entities: np.ndarray) -> np.ndarray:

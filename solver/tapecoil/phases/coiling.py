@@ -37,7 +37,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import assemble_into, global_scalar
+from tapecoil.core.dofs import assemble_into, global_scalar, owned_constrained_dofs
 from tapecoil.core.newton import SNESSolver
 from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
 from tapecoil.models.edges import facet_condition
@@ -159,7 +159,7 @@ class CoilingModel:
         of the steps (the history's hub_torque).
         """
         f = self.internal_force() if internal_force is None else internal_force
-        angle, owned = self.root.angle, self.model.W.dofmap.index_map.size_local
+        angle = self.root.angle
         shifted = []
         for sign in (1.0, -1.0):
             self.root.set(1.0, angle + sign * eps)
@@ -168,8 +168,7 @@ class CoilingModel:
                 bc.set(values)
             shifted.append(values)
         self.root.set(1.0, angle)
-        dofs = np.concatenate([bc.dof_indices()[0] for bc in self.root.bcs])
-        dofs = dofs[dofs < owned]
+        dofs = owned_constrained_dofs(self.model.W, self.root.bcs)
         rate = (shifted[0][dofs] - shifted[1][dofs]) / (2 * eps)
         return float(self.comm.allreduce(float(np.dot(f[dofs], rate)), op=MPI.SUM))
 

@@ -28,7 +28,7 @@ from petsc4py import PETSc
 from tapecoil.config import Config
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import assemble_into, global_scalar, owned_size
+from tapecoil.core.dofs import assemble_into, global_dot, global_scalar, owned_constrained_dofs, owned_size
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
@@ -138,9 +138,8 @@ class DeploymentModel:
     def residual_work(self) -> float:
         """The converged residual's work over the step just solved [J] (collective; before
         :meth:`advance`): what the Newton tolerance leaves in the step's energy balance."""
-        n = owned_size(self.model.W)
-        step = self.model.q.x.array[:n] - self.integrator.q_old.x.array[:n]
-        return self.comm.allreduce(float(np.dot(self.solver.b.array[:n], step)), op=MPI.SUM)
+        step = self.model.q.x.array - self.integrator.q_old.x.array
+        return global_dot(self.model.W, self.solver.b.array, step)
 
     def step_error(self) -> float:
         """The step's local error in the displacement over its tolerance (collective; before
@@ -187,9 +186,7 @@ class DeploymentModel:
             weight = dolfinx.fem.Function(model.W)
             assemble_into(weight, self._weight)
             b.axpy(1.0, weight.x.petsc_vec)
-        fixed = np.concatenate([bc.dof_indices()[0] for bc in self.bcs])
-        owned = b.getLocalSize()
-        b.array[fixed[fixed < owned]] = 0.0
+        b.array[owned_constrained_dofs(model.W, self.bcs)] = 0.0
         ksp = PETSc.KSP().create(self.comm)
         ksp.setOperators(M)
         ksp.setType("preonly")
@@ -229,10 +226,10 @@ class DeploymentModel:
         Returns the change of the contact energy the update makes [J] (collective): the
         obstacle between the turns follows the winding angles, which move only between steps.
         """
-        before = self.tape.energies()["contact"]
+        before = self.tape.contact_energy()
         self.contact.update(self.hub_angle)
         self.tape.accept_state()
-        return self.tape.energies()["contact"] - before
+        return self.tape.contact_energy() - before
 
 
 def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: dict) -> None:

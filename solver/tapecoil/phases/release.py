@@ -12,9 +12,8 @@ from dataclasses import dataclass
 import dolfinx
 import numpy as np
 import ufl
-from mpi4py import MPI
 
-from tapecoil.core.dofs import assemble_into, owned_size
+from tapecoil.core.dofs import assemble_into, global_dot
 from tapecoil.core.newton import PointForce
 from tapecoil.core.smoothing import smoothstep
 from tapecoil.geometry.meshes import FREE_END
@@ -102,6 +101,5 @@ class EndHold:
         """
         force = -assemble_into(dolfinx.fem.Function(self.model.W), self._compiled)
         force[self.end_dofs] += self.dead.value
-        n = owned_size(self.model.W)
-        dq = self.model.q.x.array[:n] - self.integrator.q_old.x.array[:n]
-        return self.comm.allreduce(float(np.dot(force[:n], dq)), op=MPI.SUM)
+        dq = self.model.q.x.array - self.integrator.q_old.x.array
+        return global_dot(self.model.W, force, dq)

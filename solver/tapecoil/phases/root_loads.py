@@ -23,7 +23,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
-from tapecoil.core.dofs import assemble_into
+from tapecoil.core.dofs import assemble_into, owned_constrained_dofs
 from tapecoil.core.rotation import rotation_matrix
 
 COMPONENTS = ("x", "y", "z")
@@ -39,11 +39,10 @@ class RootLoads:
         self.form = dolfinx.fem.form(model.forms.reaction())
         self.reaction = dolfinx.fem.Function(model.model.W)
         nodes = tape.contact.nodes
-        owned = model.model.W.dofmap.index_map.size_local * model.model.W.dofmap.index_map_bs
-        held = np.concatenate([bc.dof_indices()[0] for bc in model.bcs])
+        held = owned_constrained_dofs(model.model.W, model.bcs)
         n_owned = nodes.space.dofmap.index_map.size_local
         # the root's nodes this rank owns: those whose displacement the attachment holds
-        at_root = np.isin(nodes.u_dofs[:n_owned, 0], held[held < owned])
+        at_root = np.isin(nodes.u_dofs[:n_owned, 0], held)
         self.root = np.flatnonzero(at_root)
         self.nodes = nodes
         self.frame = tape.frame

@@ -106,12 +106,24 @@ class TapeOnHub:
         return owned_subspace_dofs(self.model.W, sub, self.model.mesh.topology.dim - 1, facets)
 
     def energies(self) -> dict[str, float]:
-        out = {name: global_scalar(form, self.model.mesh.comm) for name, form in self.forms.items()}
-        if self.turns is not None:
-            out["contact_coil"] = self.turns.energy()
+        comm = self.model.mesh.comm
+        out = {name: global_scalar(self.forms[name], comm) for name in ("membrane", "bending", "shear")}
+        out.update(self._contact_parts())
         out["strain"] = out["membrane"] + out["bending"] + out["shear"]
         out["contact"] = out["contact_hub"] + out["contact_coil"]
         return out
+
+    def _contact_parts(self) -> dict[str, float]:
+        comm = self.model.mesh.comm
+        coil = (
+            self.turns.energy() if self.turns is not None else global_scalar(self.forms["contact_coil"], comm)
+        )
+        return {"contact_hub": global_scalar(self.forms["contact_hub"], comm), "contact_coil": coil}
+
+    def contact_energy(self) -> float:
+        """The penalty energy of the hub's and the turns' contact [J] (collective)."""
+        parts = self._contact_parts()
+        return parts["contact_hub"] + parts["contact_coil"]
 
     # the phases and the measures read the centre line as the tape's
     centre_nodes = centre.centre_nodes
