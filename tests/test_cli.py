@@ -169,6 +169,9 @@ SHORT_RUN = (
     "[deployment]\nt_end = 0.003\nrelease_time = 0.0005\n[output]\nvtx_every = 2\ncheckpoint_every = 2\n"
 )
 
+# the same with the hub free to turn (10^-5 kg m^2, some 30 times the short tape's own inertia)
+FREE_HUB_RUN = SHORT_RUN.replace("[deployment]\n", "[deployment]\nhub = 'free'\n") + "[hub]\ninertia = 1e-5\n"
+
 
 def test_run_pipeline_then_deploy_from_its_checkpoint(tmp_path, capsys):
     """tapecoil run (coil, stow, deploy) on a short tape, then tapecoil deploy from its checkpoint."""
@@ -209,15 +212,20 @@ def _tapecoil(*args, **kwargs):
     return subprocess.Popen([sys.executable, "-m", "tapecoil", *args], **kwargs)
 
 
-@pytest.mark.parametrize(("phase", "after"), [("coiling", 3), ("deployment", 5)])
-def test_a_stopped_run_resumes_to_the_same_result(tmp_path, phase, after):
-    """SIGTERM during the coiling or the deployment: the run stops after its step with the
-    checkpoint written (exit 143); --resume finishes it with the result of a run never stopped."""
+@pytest.mark.parametrize(
+    ("phase", "after", "run"),
+    [("coiling", 3, SHORT_RUN), ("deployment", 5, SHORT_RUN), ("deployment", 5, FREE_HUB_RUN)],
+    ids=["coiling", "deployment", "deployment-free-hub"],
+)
+def test_a_stopped_run_resumes_to_the_same_result(tmp_path, phase, after, run):
+    """SIGTERM during the coiling or the deployment (with a fixed or a free hub): the run stops
+    after its step with the checkpoint written (exit 143); --resume finishes it with the result
+    of a run never stopped."""
     import signal
     import time
 
     path = tmp_path / "short.toml"
-    path.write_text(SHORT_RUN)
+    path.write_text(run)
     whole, stopped = tmp_path / "whole", tmp_path / "stopped"
     assert (
         _tapecoil(
@@ -262,7 +270,17 @@ def test_a_stopped_run_resumes_to_the_same_result(tmp_path, phase, after):
         ha = list(csv.DictReader((whole / name).open()))
         hb = list(csv.DictReader((stopped / name).open()))
         assert len(ha) == len(hb), name
-        for key in ("strain_energy", "kinetic_energy", "lambda", "end_slide", "hub_angle", "time", "step"):
+        keys = (
+            "strain_energy",
+            "kinetic_energy",
+            "lambda",
+            "end_slide",
+            "hub_angle",
+            "hub_rate",
+            "time",
+            "step",
+        )
+        for key in keys:
             if key in ha[0]:
                 va = np.array([float(r[key]) for r in ha])
                 vb = np.array([float(r[key]) for r in hb])

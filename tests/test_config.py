@@ -86,6 +86,13 @@ def test_integer_accepted_for_float(tmp_path):
         ({"contact": {"stop_penetration": 150.0}}, r"stop_penetration = 150\.0 .* \(0, 100\]"),
         ({"contact": {"search_margin": 0.0}}, r"contact\.search_margin = 0\.0 is out of range: must be > 0"),
         ({"contact": {"search_margin": -1.0}}, r"contact\.search_margin .* must be > 0"),
+        ({"hub": {"inertia": -1e-6}}, r"hub\.inertia .* must be >= 0 \[kg m\^2\]"),
+        (
+            {"deployment": {"hub": "driven"}},
+            r"deployment\.hub = 'driven' is not allowed: must be one of 'fixed'",
+        ),
+        # an inertia on a hub that does not turn would act on nothing
+        ({"hub": {"inertia": 1e-5}}, r"hub\.inertia = 1e-05 kg m\^2 acts only on a hub free to turn"),
     ],
 )
 def test_bad_values_are_refused_with_key_and_range(data, message):

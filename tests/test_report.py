@@ -11,7 +11,8 @@ from tapecoil.config import config_from_dict
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
-    """A short tape coiled by 4 rad (more than half a turn of coiled interior) and released 3 ms."""
+    """A short tape coiled by 4 rad (more than half a turn of coiled interior) and released 3 ms,
+    its hub free to turn (25 times the tape's rotary inertia)."""
     from tapecoil.app.pipeline import run
 
     config = config_from_dict(
@@ -19,7 +20,8 @@ def run_dir(tmp_path_factory):
             "tape": {"L": 0.12},
             "coiling": {"hub_angle": 4.0},
             "mesh": {"preset": "coarse"},
-            "deployment": {"t_end": 0.003, "release_time": 0.0005},
+            "hub": {"inertia": 1e-5},
+            "deployment": {"t_end": 0.003, "release_time": 0.0005, "hub": "free"},
             "output": {"vtx_every": 2},
         }
     )
@@ -45,6 +47,7 @@ EXPECTED = (
     "deployment_lambda",
     "deployment_energies",
     "deployment_root_loads",
+    "deployment_hub",
     "coiling_sequence",
     "stowed",
     "deployment_sequence",

@@ -192,6 +192,53 @@ def test_modified_ode_satisfies_equation(cfg):
     assert th.solve_deployment_ode(k, 0.0).t100 < th.deployment_time(k_of(cfg, cfg.hub.radius))
 
 
+@pytest.mark.parametrize("inertia_ratio", [0.0, 1.0, 10.0, 1e6])
+def test_free_hub_model_integrates_the_two_equations_of_motion(cfg, inertia_ratio):
+    """The free-hub reduction (theory.free_hub_factors) against the two Lagrange equations of
+    the drum angle zeta and the coiled angle theta integrated as they stand (constant coil
+    radius r, hub inertia J = ratio x rho_l L r^2): T = I_h zeta'^2 / 2 + I_s (theta' + zeta')^2
+    / 2, I_h = J + rho_l L r^2, I_s = rho_l (L - r theta)^3 / 3, V = mu R alpha r theta. The
+    time to lambda = 0.9 and the hub's turn agree to the integrators' accuracy; a hub far
+    heavier than the tape deploys as a fixed one (Eq. 2.25)."""
+    from scipy.integrate import solve_ivp
+
+    tp, r, lam0 = cfg.tape, cfg.hub.radius, 0.05
+    rho, L = tp.rho_l, tp.L
+    inertia_hub = inertia_ratio * rho * L * r**2 + th.coil_rotary_inertia(0.3, r, r, rho, L)
+    force = tp.mu * tp.R * tp.alpha * r  # dV/dtheta
+
+    def motion(_t, y):  # y = theta, zeta, p = I_s phi'; the angular momentum I_h zeta' + p = 0
+        theta, _zeta, p = y
+        straight = L - r * theta
+        inertia_straight = rho * straight**3 / 3
+        phi_dot, zeta_dot = p / inertia_straight, -p / inertia_hub
+        return [phi_dot - zeta_dot, zeta_dot, -0.5 * rho * r * straight**2 * phi_dot**2 - force]
+
+    def reached(_t, y):
+        return 1 - r * y[0] / L - 0.9
+
+    reached.terminal = True
+    direct = solve_ivp(motion, (0, 10), [(1 - lam0) * L / r, 0, 0], events=reached, rtol=1e-11, atol=1e-14)
+    t90, turn90 = direct.t_events[0][0], direct.y_events[0][0][1]
+
+    k = k_of(cfg, r)
+
+    def factors(lam):
+        return th.free_hub_factors(lam, r, inertia_hub, rho, L)
+
+    reduced = th.solve_deployment_ode(
+        lambda lam: k * factors(lam)[0], lam0, hub_turn=lambda lam: factors(lam)[1]
+    )
+    assert reduced.t90 == pytest.approx(t90, rel=1e-7)
+    # zeta is Seffen's, the tangent point at theta + zeta: winding (theta up) turns the drum by
+    # -zeta, so the coiling sense of hub_turn is -zeta
+    assert reduced.hub_turn(0.9) == pytest.approx(-turn90, rel=1e-6)
+    if inertia_ratio > 1e3:
+        assert reduced.t90 == pytest.approx(th.deployment_time_lambda0(k, lam0, 0.9), rel=1e-3)
+    # the coil is light against the deployed part: the light hub turns back and pays the tape out
+    assert reduced.hub_turn(0.9) < 0
+
+
 def test_deployment_ode_rejects_bad_lambda0():
     with pytest.raises(ValueError, match="lam0"):
         th.solve_deployment_ode(lambda lam: 1.0, 1.0)

@@ -81,9 +81,13 @@ class HubConfig:
 
     Attributes:
         radius: hub radius r_hub (r_c in the thesis) [m].
+        inertia: rotary inertia J of the hub about its axis [kg m^2], for a deployment with the
+            hub free to turn (deployment.hub = 'free'); the tape's own is added by the
+            simulation. 0 is a hub of negligible inertia: the coil alone resists its turning.
     """
 
     radius: float = param(0.0127, "m", POSITIVE)
+    inertia: float = param(0.0, "kg m^2", NON_NEGATIVE)
 
 
 @dataclass
@@ -262,6 +266,9 @@ class DeploymentConfig:
         release_time: time over which the hold on the free end (pull and guide) is released [s].
         rho_inf: high-frequency spectral radius of generalized-alpha [-]; 1 is trapezoidal Newmark.
         lambda_end: deployed fraction at which the run stops early [-].
+        hub: 'fixed' (the hub held at its stowed angle, as in Seffen and Pellegrino's fixed-hub
+            deployment) or 'free' (the hub turns on its axis with the rotary inertia
+            hub.inertia, driven by the tape's torque at the root: their free-hub model) [-].
         gravity: gravitational acceleration [m/s^2], (x, y, z) in the tape's coordinates
             (x along the stowed tape's free part, y along the hub's axis, z up from the
             hub), acting from release, for comparison with ground tests; [0, 0, -9.81] hangs
@@ -277,6 +284,7 @@ class DeploymentConfig:
     release_time: float = param(2e-3, "s", NON_NEGATIVE)
     rho_inf: float = param(0.5, "-", Range(0.0, 1.0))
     lambda_end: float = param(1.0, "-", Range(0.0, 1.0, True))
+    hub: str = param("fixed", "", ("fixed", "free"))
     gravity: list = param([0.0, 0.0, 0.0], "m/s^2")
     petsc_options: dict = param({}, "")
 
@@ -341,6 +349,11 @@ class Config:
         if self.hub.radius <= 2 * self.tape.h:
             raise ConfigError(
                 f"hub.radius = {self.hub.radius:g} m must exceed twice tape.h = {self.tape.h:g} m"
+            )
+        if self.hub.inertia > 0 and self.deployment.hub != "free":
+            raise ConfigError(
+                f"hub.inertia = {self.hub.inertia:g} kg m^2 acts only on a hub free to turn: set "
+                "deployment.hub = 'free', or leave hub.inertia out for a fixed hub"
             )
         self.check_coiling()
 

@@ -63,6 +63,14 @@ class AlphaParameters:
         return cls(rho_inf, alpha_m, alpha_f, gamma, beta)
 
 
+def newmark_rates(p: AlphaParameters, dt: float, q, q0, v0, a0):
+    """The new velocity and acceleration (v, a) of a step from (q0, v0, a0) to q over dt by the
+    Newmark relations (floats or dof arrays)."""
+    a = (q - q0 - dt * v0) / (p.beta * dt**2) - (1 - 2 * p.beta) / (2 * p.beta) * a0
+    v = v0 + dt * ((1 - p.gamma) * a0 + p.gamma * a)
+    return v, a
+
+
 class GeneralizedAlpha:
     """Time-discrete kinematics of the state Function ``q`` (any function space).
 
@@ -100,11 +108,8 @@ class GeneralizedAlpha:
 
     # -- the step, on dof arrays ---------------------------------------------------------------
     def _new_rates(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        p = self.parameters
         q, q0, v0, a0 = (f.x.array for f in (self.q, self.q_old, self.v_old, self.a_old))
-        a = (q - q0 - dt * v0) / (p.beta * dt**2) - (1 - 2 * p.beta) / (2 * p.beta) * a0
-        v = v0 + dt * ((1 - p.gamma) * a0 + p.gamma * a)
-        return v, a
+        return newmark_rates(self.parameters, dt, q, q0, v0, a0)
 
     def set_step(self, dt: float) -> None:
         self.dt.value = dt

@@ -32,15 +32,20 @@ from tapecoil.core.dofs import assemble_into, global_dot, global_scalar, owned_c
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.geometry.meshes import FREE_END
+from tapecoil.hub.rotor import HubRotor
 from tapecoil.measures.deployment import lift_off
 from tapecoil.phases.deployment_forms import DeploymentForms, director_rates  # noqa: F401 - re-exported
+from tapecoil.phases.free_hub import FreeHubCoupling
 from tapecoil.phases.release import EndHold
 from tapecoil.phases.root_loads import RootLoads
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
 class DeploymentModel:
-    """The released tape: root held at the stowed hub angle, contact kept, inertia added.
+    """The released tape: root attached to the hub, contact kept, inertia added.
+
+    The hub is held at its stowed angle (``deployment.hub = "fixed"``) or turns on its axis with
+    the rotary inertia ``hub.inertia`` (``"free"``: :mod:`tapecoil.phases.free_hub`).
 
     ``tape`` is a :class:`TapeOnHub` in the stowed state (a coiling run's, or read from a
     checkpoint of either phase); its shell, contact and root attachment are reused.
@@ -58,9 +63,9 @@ class DeploymentModel:
         self.comm = c.comm
         self.model = model = c.model
         self.contact = c.contact
-        self.hub_angle = c.root.angle
-        c.root.set(1.0, self.hub_angle)
-        c.contact.turn(self.hub_angle)
+        self._stowed_angle = c.root.angle
+        c.root.set(1.0, self._stowed_angle)
+        c.contact.turn(self._stowed_angle)
         self.bcs = c.root.bcs
         tp = cfg.tape
         self.rho_inf = cfg.deployment.rho_inf if rho_inf is None else rho_inf
@@ -108,8 +113,38 @@ class DeploymentModel:
         self.solver.terms += c.contact_terms(model.q, self.bcs, 1.0 - alpha_f, (alpha_f, ti.q_old))
         self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
         self.root_loads = RootLoads(self)
+        self._angular_momentum = dolfinx.fem.form(forms.angular_momentum(c.frame) * model.jacobian * model.dx)
+        self.rotor = self.coupling = None
+        if cfg.deployment.hub == "free":
+            self.rotor = HubRotor(cfg.hub.inertia, ti.parameters, self._stowed_angle)
+            self.coupling = FreeHubCoupling(self, self.rotor, J)
         u_dofs = c.contact.nodes.u_dofs.ravel()
         self._owned_u_dofs = np.unique(u_dofs[u_dofs < owned_size(model.W)])
+
+    @property
+    def hub_angle(self) -> float:
+        """The hub's angle at the last converged time [rad] (coiling sense)."""
+        return self._stowed_angle if self.rotor is None else self.rotor.angle
+
+    def solve(self):
+        """The step's nonlinear solve: the tape's, with the free hub's equation if it turns."""
+        return self.solver.solve() if self.coupling is None else self.coupling.solve()
+
+    def predict(self, dt: float) -> None:
+        """The step's first guess (constant velocities), the hub's included."""
+        self.integrator.predict(dt)
+        if self.rotor is not None:
+            self.rotor.predict(dt)
+            self.coupling.place(self.rotor.new_angle)
+
+    def hub_state(self) -> dict:
+        """The free hub's restart state (nothing for a fixed hub)."""
+        return {} if self.rotor is None else self.rotor.state()
+
+    def restore_hub(self, state: dict) -> None:
+        if self.rotor is not None:
+            self.rotor.restore(state)
+            self.coupling.place(self.rotor.angle)
 
     def restore(self, path: str | Path) -> None:
         """Velocity, acceleration, the stowed state and the director velocity from a checkpoint
@@ -164,6 +199,8 @@ class DeploymentModel:
         if self.scheme == "conserving":  # before q_old moves on
             self.forms.advance_director_rate()
         self.integrator.advance()
+        if self.rotor is not None:
+            self.rotor.advance()
 
     # -- start ----------------------------------------------------------------------------------
     def initial_acceleration(self) -> None:
@@ -201,6 +238,10 @@ class DeploymentModel:
         # extrapolate into radians; the mass matrix has no u-theta coupling at rest, so the
         # translational part is the consistent one regardless
         ti.a_old.x.array[self.contact.nodes.theta_dofs.ravel()] = 0.0
+        if self.rotor is not None and self.rotor.inertia > 0:
+            # the free hub starts under the torque the tape held it with (the coiling's)
+            rates, _ = self.coupling.root_rates(self.rotor.angle)
+            self.rotor.acceleration = -global_dot(model.W, rates, internal.x.array) / self.rotor.inertia
         ti.v_old.x.array[:] = 0.0
         ti.restart()
         for obj in (ksp, M, b, x):
@@ -208,9 +249,18 @@ class DeploymentModel:
 
     # -- measures -------------------------------------------------------------------------------
     def energies(self) -> dict[str, float]:
+        """The tape's energies, and the kinetic energy of the tape and the hub (``hub_kinetic``)."""
         out = self.tape.energies()
-        out["kinetic"] = global_scalar(self.kinetic_form, self.model.mesh.comm)
+        out["hub_kinetic"] = 0.0 if self.rotor is None else self.rotor.kinetic_energy()
+        out["kinetic"] = global_scalar(self.kinetic_form, self.model.mesh.comm) + out["hub_kinetic"]
         return out
+
+    def angular_momentum(self) -> float:
+        """Angular momentum about the hub's axis of the tape and the hub [kg m^2/s] (collective;
+        from the velocities of the last converged time): a free hub and a released tape keep
+        it, since nothing outside them turns them (the hub's contact is radial)."""
+        tape = global_scalar(self._angular_momentum, self.model.mesh.comm)
+        return tape + (0.0 if self.rotor is None else self.rotor.angular_momentum())
 
     def tip(self) -> np.ndarray:
         """Mean position of the free end [m] (3,)."""

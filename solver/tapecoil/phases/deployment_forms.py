@@ -160,6 +160,17 @@ class DeploymentForms:
         inertia = self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(d_ddot, ufl.dot(Dd, dtheta))
         return inertia * model.jacobian * model.dx + self.internal
 
+    def angular_momentum(self, frame):
+        """The tape's angular momentum about the hub's axis (``frame``) per unit reference area,
+        read from the velocities of t_{n+1} once the integrator has advanced:
+        rho h (x - c) x v + rho h^3/12 d x d', along the axis."""
+        model = self.model
+        v_u, v_theta = split_state(self.integrator.v_old)
+        _, d_dot, _ = director_rates(model, model.theta, v_theta)
+        arm = model.phi - ufl.as_vector(frame.axis_point)
+        spin = self.translational * ufl.cross(arm, v_u) + self.rotary * ufl.cross(model.d, d_dot)
+        return ufl.dot(ufl.as_vector(frame.axis), spin)
+
     def mass_at_rest(self):
         """The mass form at rest (no centripetal term): translational and rotary inertia."""
         model = self.model

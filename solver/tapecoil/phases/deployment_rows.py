@@ -95,6 +95,12 @@ class DeploymentRows:
             "contact_update_energy": self.update_energy,
             # the scheme's own numerical dissipation
             "scheme_dissipation": dissipated + self.residual_work + self.update_energy,
+            # the hub: its angle [rad] and rate [rad/s] (coiling sense), its kinetic energy (in
+            # kinetic_energy too), and the angular momentum of tape and hub about its axis
+            "hub_angle": m.hub_angle,
+            "hub_rate": 0.0 if m.rotor is None else m.rotor.rate,
+            "hub_kinetic_energy": e["hub_kinetic"],
+            "angular_momentum": m.angular_momentum(),
             "tip_x": tip[0],
             "tip_y": tip[1],
             "tip_z": tip[2],

@@ -71,6 +71,7 @@ class DeploymentRun(SteppedRun):
         return {
             "time": self.time,
             "next_step": self.next_step,
+            **self.m.hub_state(),
             **self.rows.restart_state(),
             **self._history_state(),
         }
@@ -80,6 +81,7 @@ class DeploymentRun(SteppedRun):
         self.time = state["time"]
         self.next_step = state["next_step"]
         self.rows.restore(state)
+        self.m.restore_hub(state)
         self._restore_history(state)
         self._restored = True
 
@@ -116,7 +118,7 @@ class DeploymentRun(SteppedRun):
             m.hold.release(target - alpha_f * dt)  # the hold at the level of the internal forces
 
         def predict(t_from, t_to):
-            ti.predict(t_to - t_from)
+            m.predict(t_to - t_from)
 
         def converged(step, end):
             self.rows.add_step_work()
@@ -141,7 +143,7 @@ class DeploymentRun(SteppedRun):
                 if end <= self.time:
                     continue
                 cont = Continuation(
-                    m.solver.solve,
+                    m.solve,
                     set_time,
                     m.model.q,
                     control(max_dt, end - self.time),

@@ -207,14 +207,23 @@ def coil_profiles(directory: Path) -> Path | None:
     return _save(fig, figures / "coil_profiles.png")
 
 
+def _deployment(directory: Path, needs: str | None = None):
+    """The deployment's history, configuration, summary and figures directory; None without a
+    deployment history (or without its column ``needs``)."""
+    h = read_history(directory / "deployment_history.csv")
+    if h is None or (needs is not None and needs not in h):
+        return None
+    return (h, *_setup(directory))
+
+
 def deployment_lambda(directory: Path) -> Path | None:
     """Deployed fraction lambda(t) against Eq. 2.20 and the modified ODE (mu and plate energy)."""
-    h = read_history(directory / "deployment_history.csv")
-    if h is None:
+    run = _deployment(directory)
+    if run is None:
         return None
     from tapecoil.measures.deployment import deployment_reference
 
-    config, summary, figures = _setup(directory)
+    h, config, summary, figures = run
     tp, r_hub = config.tape, config.hub.radius
     lam0 = summary["deployment"]["measures"]["lambda0"]
     t = h["time"]
@@ -225,8 +234,9 @@ def deployment_lambda(directory: Path) -> Path | None:
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
     ax.plot(t, h["lambda"], lw=2, label="shell (lift-off point)")
     ax.plot(tt, theory.deployed_fraction(tt, k_hub), "--", label="Eq. 2.20, r = r_hub, lambda0 = 0")
-    ax.plot(tt, ode(tt), ":", label=f"modified ODE (mu), r(lambda), lambda0 = {lam0:.3f}")
-    ax.plot(tt, plate(tt), "-.", label="the same ODE with the plate energy w(r)")
+    free = ", free hub" if config.deployment.hub == "free" else ""
+    ax.plot(tt, ode(tt), ":", label=f"modified ODE (mu), r(lambda), lambda0 = {lam0:.3f}{free}")
+    ax.plot(tt, plate(tt), "-.", label=f"the same ODE with the plate energy w(r){free}")
     ax.axhline(0.9, color="grey", lw=0.5)
     ax.set(xlabel="time [s]", ylabel="deployed fraction lambda", title="deployment", ylim=(0, 1.05))
     return _save(fig, figures / "deployment_lambda.png")
@@ -234,10 +244,10 @@ def deployment_lambda(directory: Path) -> Path | None:
 
 def deployment_energies(directory: Path) -> Path | None:
     """Strain, kinetic, contact and numerically dissipated energy during the deployment."""
-    h = read_history(directory / "deployment_history.csv")
-    if h is None:
+    run = _deployment(directory)
+    if run is None:
         return None
-    _, summary, figures = _setup(directory)
+    h, _, summary, figures = run
     stowed = summary["deployment"]["measures"]["energy"]["stowed"]
     t = h["time"]
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
@@ -260,10 +270,10 @@ def deployment_energies(directory: Path) -> Path | None:
 
 def deployment_root_loads(directory: Path) -> Path | None:
     """The force and torque the tape exerts on the hub through its root, against time."""
-    h = read_history(directory / "deployment_history.csv")
-    if h is None or "root_torque" not in h:
+    run = _deployment(directory, needs="root_torque")
+    if run is None:
         return None
-    _, _, figures = _setup(directory)
+    h, _, _, figures = run
     t = h["time"]
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.0), sharex=True)
     for axis in ("x", "y", "z"):
@@ -275,6 +285,26 @@ def deployment_root_loads(directory: Path) -> Path | None:
     return _save(fig, figures / "deployment_root_loads.png")
 
 
+def deployment_hub(directory: Path) -> Path | None:
+    """A free hub's turn against lambda, simulated and by the free-hub model, and its rate."""
+    run = _deployment(directory, needs="hub_rate")
+    if run is None or not np.any(run[0]["hub_rate"]):
+        return None
+    from tapecoil.measures.deployment import deployment_reference
+
+    h, config, summary, figures = run
+    lam0 = summary["deployment"]["measures"]["lambda0"]
+    model = deployment_reference(config, lam0, energy="plate")
+    lam = np.linspace(lam0, 1.0, 200)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10.0, 4.2))
+    left.plot(h["lambda"], h["hub_angle"] - h["hub_angle"][0], lw=2, label="shell")
+    left.plot(lam, model.hub_turn(lam), ":", label="free-hub model (angular momentum 0)")
+    left.set(xlabel="deployed fraction lambda", ylabel="hub turn since release [rad]", title="free hub")
+    right.plot(h["time"], h["hub_rate"])
+    right.set(xlabel="time [s]", ylabel="hub rate [rad/s]", title="hub rate (coiling sense)")
+    return _save(fig, figures / "deployment_hub.png")
+
+
 FIGURES = (
     coiling_energies,
     coiling_forces,
@@ -283,6 +313,7 @@ FIGURES = (
     deployment_lambda,
     deployment_energies,
     deployment_root_loads,
+    deployment_hub,
 )
 
 

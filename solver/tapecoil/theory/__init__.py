@@ -37,9 +37,11 @@ from tapecoil.theory.coiling_tension import (
 )
 from tapecoil.theory.deployment import (
     DeploymentSolution,
+    coil_rotary_inertia,
     deployed_fraction,
     deployment_time,
     deployment_time_lambda0,
+    free_hub_factors,
     seffen_rate,
     solve_deployment_ode,
 )
@@ -60,6 +62,7 @@ __all__ = [
     "Prediction",
     "arc_second_moment",
     "coil_radius_during_deployment",
+    "coil_rotary_inertia",
     "coil_stresses",
     "coiled_length_from_radius",
     "coiled_length_from_rotation",
@@ -73,6 +76,7 @@ __all__ = [
     "energy_density",
     "flexural_rigidity",
     "fold_moment",
+    "free_hub_factors",
     "max_hub_angle",
     "opposite_sense_energy_density",
     "outer_radius_after_rotation",

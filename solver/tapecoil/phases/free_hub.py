@@ -1,0 +1,172 @@
+"""The deployment with the hub free to turn: the hub's equation of motion solved with the tape's.
+
+The tape's root is attached to the hub (:class:`~tapecoil.hub.attachment.HubRoot`): its dofs are
+prescribed, g(zeta), by the hub angle zeta. The hub (:class:`~tapecoil.hub.rotor.HubRotor`)
+obeys
+
+    phi(zeta) = J a_m(zeta) + G(zeta) . F(q) = 0,
+
+where F is the tape's residual without the root's conditions (on the root's dofs, the force the
+attachment supplies to the tape: G . F is the torque the hub must exert, the opposite of the
+tape's torque on it) and G = dg/dzeta the rate of the root's dofs as the hub turns. It is the
+virtual work of the tape and the hub together in a turn of the hub, at the generalized-alpha
+levels of the tape's own equation.
+
+Each trial angle is a tape solve (the solver's Newton, root held at g(zeta)); phi is then
+solved by Newton's method with its total derivative along the tape's equilibria. To first order
+a change of angle moves the tape by w dzeta, with A w = [-(K G) on the free dofs, G on the
+root's], A the solver's factorised Jacobian (the root's rows the identity) and K G the action of
+the Jacobian without conditions; K is symmetric, so G^T K = (K G)^T and
+
+    dphi/dzeta = J (1 - alpha_m) / (beta dt^2) + G' . F + (K G) . w.
+
+The contact surfaces turn with the hub too: the spiral obstacle's climb over the root's step
+(and the surface contact's fairing behind the root) are fixed to it, so the penalty energy E of
+the obstacle depends on zeta at a fixed tape, and dE/dzeta, the torque the tape puts on them,
+joins phi (d2E/dzeta2 its derivative; its cross-derivative with q is left out, which only slows
+the convergence: phi itself is exact). Without it the tape's and the hub's angular momentum is
+not kept whenever the coil slides over the step.
+
+The step dzeta = -phi / phi' carries the tape along by w dzeta, so the next tape solve starts
+on its new equilibrium to first order and takes one or two iterations. The root's rates G and
+G' and the obstacle's dE/dzeta are central differences over ``angle_step``.
+"""
+
+from __future__ import annotations
+
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from petsc4py import PETSc
+
+from tapecoil.core import compat
+from tapecoil.core.dofs import global_dot, owned_constrained_dofs
+from tapecoil.core.newton import SolveResult
+from tapecoil.hub.rotor import HubRotor
+
+
+class FreeHubCoupling:
+    """The hub's and the tape's equations of a :class:`~tapecoil.phases.deployment.DeploymentModel`
+    solved together (see the module docstring); ``jacobian`` is the UFL Jacobian of the tape's
+    solver."""
+
+    angle_step = 1e-4  # [rad]: the central differences of the root's prescribed dofs
+    max_iterations = 10
+    # phi converged: this fraction of the torques in balance, or of the tape's section moment
+    rtol, floor = 1e-7, 1e-9
+    angle_round_off = 1e-14  # [-]: a change of angle below this relative size changes nothing
+
+    def __init__(self, model, rotor: HubRotor, jacobian):
+        self.m, self.rotor = model, rotor
+        W = model.model.W
+        self.root, self.contact, self.solver = model.tape.root, model.contact, model.solver
+        self.rates = dolfinx.fem.Function(W)  # G, the action's argument (ghosts updated)
+        self._action = dolfinx.fem.form(ufl.action(jacobian, self.rates))
+        self._vec = compat.create_vector(W)
+        self._w = compat.create_vector(W)
+        self._held = owned_constrained_dofs(W, model.bcs)
+        self._n = self._vec.getLocalSize()
+        tp = model.config.tape
+        self.moment_scale = tp.D * tp.b / tp.R  # [N m]: the section's bending moment at 1/R
+        self.iterations = 0  # hub Newton steps over the run (on every rank)
+
+    def place(self, angle: float) -> None:
+        """Root and spiral obstacle at the hub angle ``angle`` [rad]."""
+        self.root.set(1.0, angle)
+        self.contact.turn(angle)
+
+    def _prescribed(self, angle: float) -> np.ndarray:
+        self.root.set(1.0, angle)
+        with self._vec.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.set_bc(self._vec, self.m.bcs)
+        return self._vec.array.copy()
+
+    def root_rates(self, angle: float) -> tuple[np.ndarray, np.ndarray]:
+        """G and G' at ``angle`` on the owned dofs (zero off the root); the root left at ``angle``."""
+        e = self.angle_step
+        plus, minus, here = self._prescribed(angle + e), self._prescribed(angle - e), self._prescribed(angle)
+        return (plus - minus) / (2 * e), (plus - 2 * here + minus) / e**2
+
+    def _assemble(self, form) -> np.ndarray:
+        with self._vec.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(self._vec, form)
+        self._vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return self._vec
+
+    def obstacle_torque(self, angle: float) -> tuple[float, float]:
+        """dE/dzeta and d2E/dzeta2 of the obstacle's contact energy at the state in place: the
+        torque [N m] the tape puts on the hub's contact surfaces (the climb over the root's
+        step turns with the hub), and its stiffness [N m/rad]; the obstacle left at ``angle``."""
+        e, energy = self.angle_step, []
+        for a in (angle + e, angle - e, angle):
+            self.contact.turn(a)
+            energy.append(self.m.tape.obstacle_energy())
+        plus, minus, here = energy
+        return (plus - minus) / (2 * e), (plus - 2 * here + minus) / e**2
+
+    def residual(self, rates: np.ndarray, angle: float) -> tuple[float, float]:
+        """phi at the current state and ``angle``, and the size of the torques it balances [N m]."""
+        b = self._assemble(self.solver.F_form)
+        for term in self.solver.terms:
+            term.add_residual(b)
+        W = self.m.model.W
+        self._force = b.array.copy()
+        torque = global_dot(W, rates, self._force)
+        obstacle, self._obstacle_stiffness = self.obstacle_torque(angle)
+        inertia = self.rotor.inertia_torque()
+        return inertia + torque + obstacle, max(abs(inertia), abs(torque), abs(obstacle))
+
+    def slope(self, rates: np.ndarray, curvature: np.ndarray) -> tuple[float, np.ndarray]:
+        """dphi/dzeta along the equilibria and the tape's first-order response w (owned dofs),
+        after :meth:`residual` at the same state."""
+        W = self.m.model.W
+        self.rates.x.array[: self._n] = rates
+        self.rates.x.scatter_forward()
+        action = self._assemble(self._action).array.copy()
+        rhs = self._vec
+        rhs.array[:] = -action
+        rhs.array[self._held] = rates[self._held]
+        self.solver.snes.getKSP().solve(rhs, self._w)
+        w = self._w.array.copy()
+        value = (
+            self.rotor.inertia_stiffness()
+            + self._obstacle_stiffness
+            + global_dot(W, curvature, self._force)
+            + global_dot(W, action, w)
+        )
+        return value, w
+
+    def solve(self) -> SolveResult:
+        """The step's tape and hub solved together from the predicted state and angle."""
+        rotor, q = self.rotor, self.m.model.q
+        total = 0
+        self.place(rotor.new_angle)
+        for _ in range(self.max_iterations):
+            result = self.solver.solve()
+            total += result.iterations
+            if not result.converged:
+                self.place(rotor.new_angle)
+                return SolveResult(False, total, result.reason, result.residual_norm)
+            rates, curvature = self.root_rates(rotor.new_angle)
+            phi, size = self.residual(rates, rotor.new_angle)
+            if abs(phi) <= max(self.rtol * size, self.floor * self.moment_scale):
+                return SolveResult(True, total, result.reason, result.residual_norm)
+            slope, w = self.slope(rates, curvature)
+            if not (np.isfinite(slope) and slope > 0):
+                break
+            change = -phi / slope
+            if abs(change) <= self.angle_round_off * max(1.0, abs(rotor.new_angle)):
+                # a hub far heavier than the tape: phi's tolerance is finer than the angle's
+                # round-off times the hub's stiffness J (1 - alpha_m) / (beta dt^2)
+                return SolveResult(True, total, result.reason, result.residual_norm)
+            self.iterations += 1
+            rotor.new_angle += change
+            q.x.array[: self._n] += change * w
+            q.x.scatter_forward()
+            self.place(rotor.new_angle)
+        return SolveResult(
+            False, total, int(PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT), result.residual_norm
+        )
