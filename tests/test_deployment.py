@@ -164,8 +164,8 @@ def test_lambda_of_a_straight_tape_leaving_the_hub(deployed_short):
     """The lift-off measure on constructed states: the stowed coil, and a tape laid straight."""
     model, _ = deployed_short
     nodes = model.contact.nodes
-    q = model.model.q.x.array
-    saved = q.copy()
+    q, psi = model.model.q.x.array, model.contact.psi.x.array
+    saved, saved_psi = q.copy(), psi.copy()
     try:
         # every point on the hub's top tangent line, straight along +x from the root at x = 0
         # (hub angle 0 geometry), the section flat: lambda = 1 (nothing wound)
@@ -179,8 +179,27 @@ def test_lambda_of_a_straight_tape_leaving_the_hub(deployed_short):
         lift = model.lift_off()
         assert lift["lambda"] == pytest.approx(1.0, abs=0.02)
     finally:
-        q[:] = saved
+        q[:], psi[:] = saved, saved_psi
         model.tape.root.set(1.0, model.hub_angle)
+        model.contact.turn(model.hub_angle)
+
+
+def test_lambda_at_release_is_the_coilings_free_fraction(stowed_short):
+    """One definition of lambda in both phases (measures.deployment.lift_off): the deployment's
+    lambda0 is the coiling's free fraction at the stowed state, by construction (a consistency
+    check). The tangent point of the winding angles, the coiling's coiled length, lies beyond
+    the lift-off point, where the section's flattening lifts the centre line off the hub
+    gradually: by 9.9 mm here, under one element (12 mm); 1.3 mm on the coarse benchmark,
+    11.8 mm on the default one."""
+    from tapecoil.measures.coiling import coil_measures
+
+    free = coil_measures(stowed_short.tape)["free_fraction"]
+    _, result = deploy(stowed_short, short_stowed_config(t_end=2e-4))
+    assert result.history[0]["lambda"] == free["lambda"]
+    config = short_stowed_config()
+    element = config.tape.L / stowed_short.tape.strip.resolution.along
+    gap = (free["lambda"] - free["tangent_point"]) * config.tape.L
+    assert 0 <= gap < 2 * element
 
 
 def test_bad_deployment_config_is_rejected_before_computing():

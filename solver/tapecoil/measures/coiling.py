@@ -15,6 +15,7 @@ import ufl
 
 from tapecoil import theory
 from tapecoil.core.dofs import cell_midpoint_values, global_scalar
+from tapecoil.measures.deployment import lift_off
 from tapecoil.measures.measure import Measure
 
 if TYPE_CHECKING:
@@ -80,6 +81,14 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     geometry = tape.coil_geometry(angle)
     coiled = geometry["coiled_length"]
     out: dict = {"hub_angle": angle, "coiled_length": coiled}
+    # the free fraction by the deployment's lambda (lift-off from the turn beneath), which the
+    # deployment starts from, and by the tangent point of the winding angles
+    lifted = lift_off(tape)
+    out["free_fraction"] = {
+        "lambda": lifted["lambda"],
+        "lift_off_coiled_length": lifted["coiled_length"],
+        "tangent_point": 1.0 - coiled / tp.L,
+    }
 
     # energy: the coiled part (psi behind the tangent point) against the plate estimate for the
     # spiral of that length; the whole tape's strain energy includes the ploy region

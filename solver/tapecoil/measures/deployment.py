@@ -169,8 +169,14 @@ def deployment_measures(config, history: list[dict]) -> dict:
     }
 
 
-def lift_off(tape, gap_factor: float) -> dict[str, float]:
-    """The coiled length and the deployed fraction lambda (collective).
+# lift-off: a centre-line point whose inner face is more than this many thicknesses off its
+# obstacle (the turn beneath or the hub) has left the coil; the coiling and the deployment
+# read lambda by this one definition
+LIFT_OFF_GAP = 2.0
+
+
+def lift_off(tape, gap_factor: float = LIFT_OFF_GAP) -> dict[str, float]:
+    """The coiled length and the deployed fraction lambda (collective), in every phase.
 
     The lift-off point is the last point of the centre line, counted from the root, whose
     inner face lies within ``gap_factor`` h of its obstacle (the turn beneath or the

@@ -7,6 +7,7 @@ hub torque, measured twice: from the energy balance of the step and as the root'
 from __future__ import annotations
 
 from tapecoil.core.stepping import StepRecord
+from tapecoil.measures.deployment import lift_off
 
 
 class CoilingRows:
@@ -65,4 +66,6 @@ class CoilingRows:
             "max_penetration": m.tape.max_penetration(),
             "coiled_length": geometry["coiled_length"],
             "outer_radius": geometry["outer_radius"],
+            # the deployed fraction by the deployment's definition (measures.deployment.lift_off)
+            "lambda": lift_off(m.tape)["lambda"],
         }

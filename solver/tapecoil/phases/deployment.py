@@ -53,10 +53,6 @@ class DeploymentModel:
     radius.
     """
 
-    # lift-off: a centre-line point whose inner face is more than this many thicknesses off its
-    # obstacle (the turn beneath or the hub) has left the coil (see lift_off)
-    lift_off_gap = 2.0
-
     def __init__(self, tape: TapeOnHub, config: Config | None = None, rho_inf: float | None = None):
         self.tape = c = tape
         self.config = cfg = config or tape.config
@@ -268,7 +264,7 @@ class DeploymentModel:
 
     def lift_off(self) -> dict[str, float]:
         """The coiled length and the deployed fraction lambda (:func:`measures.deployment.lift_off`)."""
-        return lift_off(self.tape, self.lift_off_gap)
+        return lift_off(self.tape)
 
     def update(self) -> float:
         """After a converged step: winding angles from the new state (the hub stays put).
