@@ -6,7 +6,8 @@ deploys the coarse benchmark from the coiling validation's stowed state
 (results/validate-coil-coarse, coiled first if it is not there) with the hub free to turn, of
 rotary inertia ``--inertia`` times the stowed tape's own (theory.coil_rotary_inertia at
 lambda = 0), into results/free-hub-J<inertia>, and prints the times and hub turns at
-lambda = 0.2 ... 0.9 against the model with the plate energy, and the angular momentum kept.
+lambda = 0.2 ... 0.9 against the model with the plate energy, and the angular momentum kept;
+the hub's turn against lambda is drawn into free_hub.png there.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from tapecoil.config import load_config
 from tapecoil.measures.deployment import at_crossing, deployment_reference
 from tapecoil.phases.coiling_run import run_coiling
 from tapecoil.phases.deployment_run import run_deployment
+from tapecoil.post.plots import free_hub_figure, read_history
 
 
 def main() -> None:
@@ -77,6 +79,9 @@ def main() -> None:
             f"lambda {lam}: t {1e3 * t:.1f} / {1e3 * t_ref:.1f} ms ({t / t_ref - 1:+.1%}), "
             f"turn {turn:.3f} / {turn_ref:.3f} rad ({turn / turn_ref - 1:+.1%})"
         )
+    free_hub_figure(
+        read_history(out / "deployment_history.csv"), config, history[0]["lambda"], out / "free_hub.png"
+    )
     released = [r for r in history if r["time"] > 1.5 * config.deployment.release_time]
     H = np.array([r["angular_momentum"] for r in released])
     spin = max(abs(inertia * r["hub_rate"]) for r in history)

@@ -243,28 +243,36 @@ def deployment_lambda(directory: Path) -> Path | None:
 
 
 def deployment_energies(directory: Path) -> Path | None:
-    """Strain, kinetic, contact and numerically dissipated energy during the deployment."""
+    """The energy balance of the deployment: strain, kinetic and contact energy against the
+    stowed energy, and below, in per cent of it, the remainder of the balance and its parts
+    (the scheme's dissipation, the residual's work, the contact updates), too small to read on
+    the first scale."""
     run = _deployment(directory)
     if run is None:
         return None
     h, _, summary, figures = run
     stowed = summary["deployment"]["measures"]["energy"]["stowed"]
     t = h["time"]
-    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.6), sharex=True, height_ratios=(3, 2))
     for key, label in (
         ("strain_energy", "strain"),
-        ("kinetic_energy", "kinetic"),
+        ("kinetic_energy", "kinetic (tape and hub)"),
         ("contact_energy", "contact"),
-        ("dissipated_energy", "remainder (stowed + work - the rest)"),
+    ):
+        top.plot(t, h[key], label=label)
+    total = h["strain_energy"] + h["kinetic_energy"] + h["contact_energy"] + h["dissipated_energy"]
+    top.plot(t, total - h["external_work"], "k--", label="sum + remainder - work of the release")
+    top.axhline(stowed, color="grey", lw=0.5)
+    top.set(ylabel="energy [J]", title="energy balance")
+    for key, label in (
+        ("dissipated_energy", "remainder (stowed + work - strain - contact - kinetic)"),
         ("scheme_dissipation", "the scheme's dissipation"),
+        ("residual_work", "the converged residual's work"),
         ("contact_update_energy", "contact updates between steps"),
     ):
         if key in h:
-            ax.plot(t, h[key], label=label)
-    total = h["strain_energy"] + h["kinetic_energy"] + h["contact_energy"] + h["dissipated_energy"]
-    ax.plot(t, total - h["external_work"], "k--", label="sum - work of the release")
-    ax.axhline(stowed, color="grey", lw=0.5)
-    ax.set(xlabel="time [s]", ylabel="energy [J]", title="energy balance")
+            bottom.plot(t, 100 * h[key] / stowed, label=label)
+    bottom.set(xlabel="time [s]", ylabel="per cent of the stowed energy")
     return _save(fig, figures / "deployment_energies.png")
 
 
@@ -285,15 +293,11 @@ def deployment_root_loads(directory: Path) -> Path | None:
     return _save(fig, figures / "deployment_root_loads.png")
 
 
-def deployment_hub(directory: Path) -> Path | None:
-    """A free hub's turn against lambda, simulated and by the free-hub model, and its rate."""
-    run = _deployment(directory, needs="hub_rate")
-    if run is None or not np.any(run[0]["hub_rate"]):
-        return None
+def free_hub_figure(h: dict[str, np.ndarray], config, lam0: float, path: Path) -> Path:
+    """A free hub's turn against lambda, simulated (history ``h``) and by the free-hub model
+    from ``lam0``, and its rate against time."""
     from tapecoil.measures.deployment import deployment_reference
 
-    h, config, summary, figures = run
-    lam0 = summary["deployment"]["measures"]["lambda0"]
     model = deployment_reference(config, lam0, energy="plate")
     lam = np.linspace(lam0, 1.0, 200)
     fig, (left, right) = plt.subplots(1, 2, figsize=(10.0, 4.2))
@@ -302,7 +306,17 @@ def deployment_hub(directory: Path) -> Path | None:
     left.set(xlabel="deployed fraction lambda", ylabel="hub turn since release [rad]", title="free hub")
     right.plot(h["time"], h["hub_rate"])
     right.set(xlabel="time [s]", ylabel="hub rate [rad/s]", title="hub rate (coiling sense)")
-    return _save(fig, figures / "deployment_hub.png")
+    return _save(fig, path)
+
+
+def deployment_hub(directory: Path) -> Path | None:
+    """A free hub's turn against lambda and its rate (:func:`free_hub_figure`)."""
+    run = _deployment(directory, needs="hub_rate")
+    if run is None or not np.any(run[0]["hub_rate"]):
+        return None
+    h, config, summary, figures = run
+    lam0 = summary["deployment"]["measures"]["lambda0"]
+    return free_hub_figure(h, config, lam0, figures / "deployment_hub.png")
 
 
 FIGURES = (
