@@ -129,6 +129,35 @@ def test_short_coil_wraps_onto_the_hub(coiled_short, cfg):
     assert late and np.median(late) == pytest.approx(steady, rel=0.10)
 
 
+def test_turning_the_hub_back_pays_the_tape_out_reversibly(cfg):
+    """Coiled by 2 rad, then turned back to 1 rad with the pull held (a driven deployer paying
+    out, quasi-static): the free end slides back out by the wound length, the deployed fraction
+    lambda grows, and the hub torque from the energy balance of the steps is the coiling's at the
+    same angles (frictionless and quasi-static, the path is reversible; steady coiling
+    rho (T + b w(rho)) within 10 % as for the coiling)."""
+    from tapecoil import theory
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+
+    model = CoilingModel(short_tape(hub_angle=2.0), MPI.COMM_SELF)
+    run = CoilingRun(model)
+    run.flatten()
+    run.coil(2.0)
+    wound = len(run.result.history)
+    run.coil(1.0, start_angle=2.0)
+    out, back = run.result.history[:wound], run.result.history[wound:]
+    assert back[-1]["hub_angle"] == pytest.approx(1.0) and all(r["phase"] == "coil" for r in back)
+    assert np.all(np.diff([r["hub_angle"] for r in back]) < 0)
+    tp, h, r_hub = cfg.tape, cfg.tape.h, cfg.hub.radius
+    rho = r_hub + h / 2
+    assert back[-1]["end_slide"] - out[-1]["end_slide"] == pytest.approx(rho * 1.0, rel=0.05)
+    assert back[-1]["lambda"] > out[-1]["lambda"] + 0.5 * rho / tp.L
+    assert back[-1]["coiled_length"] == pytest.approx(rho * 1.0, rel=0.05)  # as when coiling
+    steady = rho * (cfg.coiling.tension + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
+    torque = [r["hub_torque"] for r in back[1:] if r["hub_torque"] != ""]
+    assert torque and np.median(torque) == pytest.approx(steady, rel=0.10)
+
+
 def test_checkpoint_round_trip(coiled_short, tmp_path):
     from tapecoil.phases.coiling import read_checkpoint, write_checkpoint
 

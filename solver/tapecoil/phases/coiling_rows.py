@@ -40,7 +40,7 @@ class CoilingRows:
         # undefined (an empty cell) for the first step and across a snap passed by relaxation,
         # where stored energy is released without work of the hub
         torque = ""
-        if phase == "coil" and self.last_potential is not None and step.step > 0 and not step.relaxed:
+        if phase == "coil" and self.last_potential is not None and step.step != 0 and not step.relaxed:
             torque = (potential - self.last_potential) / step.step
         self.last_potential = potential
         return {

@@ -113,8 +113,9 @@ class CoilingRun(SteppedRun):
         absolute (radians), so a restarted run steps as the uninterrupted one would.
         """
         m = self.m
-        span = final_angle - start_angle
-        # the step limits in radians, as fractions of the span the continuation works on
+        # the step limits in radians, as fractions of the span the continuation works on (which
+        # turns the hub back, paying the tape out, when final_angle < start_angle)
+        span = abs(final_angle - start_angle)
         hub_angle = m.config.coiling.hub_angle
         control = m.config.solver.control(
             initial_step=min(min(0.05, self.max_step) / span, 1.0),
