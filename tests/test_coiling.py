@@ -345,6 +345,15 @@ def test_equal_sense_coil_curves_with_its_section_and_flattens_on_the_hub(coiled
     wound = (psi > 1.0) & (psi < 2 * math.pi - 1.0) & (np.abs(nodes.xi[1]) < 1e-9)
     assert wound.any()
     assert np.all(np.abs(distance[wound] - rho) < 0.5 * tp.h)
+    # the equal-sense plate estimate (physics brief Sec. 10): the stored energy of the coiled
+    # length and the surface stresses, with the nu terms' sign changed, within the opposite
+    # sense's tolerances (5 % and 10 %)
+    from tapecoil.measures.coiling import coil_measures
+
+    measures = coil_measures(model.tape)
+    assert measures["stored_energy_coiled"]["passed"], measures["stored_energy_coiled"]
+    for name in ("stress_x", "stress_y"):
+        assert measures[name]["passed"], measures[name]
 
 
 def test_surface_contact_keeps_the_second_turn_off_the_first():

@@ -92,6 +92,34 @@ def test_stored_energy_section_3(cfg):
     assert close(tp.mu * tp.R**2 * tp.alpha * 36.0, 1.31)
 
 
+def test_equal_sense_energy_and_stresses_section_10(cfg):
+    """Equal sense (physics brief Sec. 10, checked by hand there): the nu terms change sign.
+    w_eq(R) = D (1 - nu)/R^2, the D (1 -+ nu) of Eq. 2.17; the stored energy is the closed form
+    of w_eq over the spiral; the surface stresses are E/(1 - nu^2) (h/2)(1/rho - nu/R) and
+    (1/R - nu/rho) in magnitude, from the strains z/rho and -z/R."""
+    tp, r_hub, h = cfg.tape, cfg.hub.radius, cfg.tape.h
+    assert th.coil_energy_at_R(tp.D, tp.nu, tp.R, "equal") == pytest.approx(tp.D * (1 - tp.nu) / tp.R**2)
+    assert th.coil_energy_at_R(tp.D, tp.nu, tp.R) == pytest.approx(tp.mu)
+    rho = r_hub + h / 2
+    w = th.energy_density(rho, tp.R, tp.D, tp.nu, "equal")
+    assert w == pytest.approx(0.5 * tp.D * (1 / rho**2 + 1 / tp.R**2 - 2 * tp.nu / (rho * tp.R)))
+    assert w < th.energy_density(rho, tp.R, tp.D, tp.nu)  # the two curvatures partly cancel
+
+    def integrand(phi):
+        r = r_hub + h / 2 + h * phi / (2 * math.pi)
+        return th.energy_density(r, tp.R, tp.D, tp.nu, "equal") * r * tp.b
+
+    numeric, _ = quad(integrand, 0, 36.0, epsabs=0, epsrel=1e-13)
+    U = th.stored_energy(36.0, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu, "equal")
+    assert U == pytest.approx(numeric, rel=1e-10)
+    c = tp.E / (1 - tp.nu**2) * h / 2
+    sx, sy = th.coil_stresses(rho, tp.R, tp.E, tp.nu, h / 2, "equal")
+    assert sx == pytest.approx(c * (1 / rho - tp.nu / tp.R))
+    assert sy == pytest.approx(-c * (1 / tp.R - tp.nu / rho))
+    with pytest.raises(ValueError, match="coiling sense"):
+        th.energy_density(rho, tp.R, tp.D, tp.nu, "same")
+
+
 def test_surface_stresses_section_4(cfg):
     tp = cfg.tape
     sx, sy = th.coil_stresses(12.7e-3, tp.R, tp.E, tp.nu, tp.h / 2)

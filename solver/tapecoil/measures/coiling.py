@@ -95,7 +95,8 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     wound = ufl.conditional(ufl.lt(contact.psi, angle), 1.0, 0.0)
     coiled_energy = sum(global_scalar(f, m.mesh.comm) for f in m.energy_forms(wound))
     wound_angle = theory.rotation_for_coiled_length(coiled, r_hub, h)
-    reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu)
+    sense = cfg.coiling.sense
+    reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu, sense)
     total = tape.energies()
     plate = "plate estimate w(rho) over the coiled spiral (physics brief Sec. 3)"
     out["stored_energy_coiled"] = Measure(
@@ -131,7 +132,7 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     )
     if interior.any():
         curvature_ratio = np.abs(k_long[interior]) * rho[interior]
-        sx_ref, sy_ref = theory.coil_stresses(rho[interior], tp.R, E, nu, h / 2)
+        sx_ref, sy_ref = np.abs(theory.coil_stresses(rho[interior], tp.R, E, nu, h / 2, sense))
         sx_ratio, sy_ratio = sx[interior] / sx_ref, sy[interior] / sy_ref
         out["cells_interior"] = int(interior.sum())
         out["curvature_longitudinal"] = Measure(
@@ -167,7 +168,9 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
                 stress_basis,
                 extra={
                     "worst": float(ratio[np.argmax(np.abs(ratio - 1))]),
-                    "reference_first_turn_Pa": float(theory.coil_stresses(r_hub, tp.R, E, nu, h / 2)[axis]),
+                    "reference_first_turn_Pa": float(
+                        theory.coil_stresses(r_hub, tp.R, E, nu, h / 2, sense)[axis]
+                    ),
                 },
             ).to_dict()
 

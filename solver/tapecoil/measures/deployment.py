@@ -32,6 +32,8 @@ def deployment_reference(config, lam0: float, energy: str = "mu") -> theory.Depl
     if energy not in ("mu", "plate"):
         raise ValueError(f"energy must be 'mu' or 'plate', got {energy!r}")
     free = config.deployment.hub == "free"
+    sense = config.coiling.sense
+    mu = theory.coil_energy_at_R(tp.D, tp.nu, tp.R, sense)
 
     def radius(lam):
         return float(theory.coil_radius_during_deployment(lam, r_hub, tp.h, tp.L))
@@ -44,7 +46,7 @@ def deployment_reference(config, lam0: float, energy: str = "mu") -> theory.Depl
 
     def rate(lam):
         r = radius(lam)
-        density = tp.mu if energy == "mu" else float(theory.energy_density(r, tp.R, tp.D, tp.nu))
+        density = mu if energy == "mu" else float(theory.energy_density(r, tp.R, tp.D, tp.nu, sense))
         k = theory.seffen_rate(density, r, tp.R, tp.alpha, tp.rho_l, tp.L)
         return k * free_hub(lam)[0] if free else k
 
@@ -56,7 +58,9 @@ def deployment_measures(config, history: list[dict]) -> dict:
     lam0 = history[0]["lambda"]
     ode = deployment_reference(config, lam0)
     tp, r_hub = config.tape, config.hub.radius
-    k_hub = theory.seffen_rate(tp.mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
+    sense = config.coiling.sense
+    mu = theory.coil_energy_at_R(tp.D, tp.nu, tp.R, sense)
+    k_hub = theory.seffen_rate(mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
     stowed = history[0]["strain_energy"] + history[0]["contact_energy"]
     dissipated = np.array([r["dissipated_energy"] for r in history])
 
@@ -117,8 +121,8 @@ def deployment_measures(config, history: list[dict]) -> dict:
         ).to_dict(),
         "released_energy_per_area": {
             "computed": released / (unspooled * tp.b) if unspooled > 0 else None,
-            "mu": tp.mu,
-            "plate_at_coil_radius": float(theory.energy_density(config.hub.radius, tp.R, tp.D, tp.nu)),
+            "mu": mu,
+            "plate_at_coil_radius": float(theory.energy_density(config.hub.radius, tp.R, tp.D, tp.nu, sense)),
         },
         "time_to_end": Measure(
             "time to lambda = 1, modified ODE (mu) [s]",

@@ -77,7 +77,14 @@ def coiling_energies(directory: Path) -> Path | None:
     angle = h["hub_angle"]
     plate = [
         theory.stored_energy(
-            theory.rotation_for_coiled_length(s, r_hub, tp.h), r_hub, tp.h, tp.R, tp.alpha, tp.D, tp.nu
+            theory.rotation_for_coiled_length(s, r_hub, tp.h),
+            r_hub,
+            tp.h,
+            tp.R,
+            tp.alpha,
+            tp.D,
+            tp.nu,
+            config.coiling.sense,
         )
         for s in h["coiled_length"]
     ]
@@ -117,7 +124,7 @@ def coiling_forces(directory: Path) -> Path | None:
         ax[0].plot(angle, growing["bending"], "k:", label="Eq. 4.5, the coil's radius r(lambda)")
     ax[0].set(xlabel="hub angle [rad]", ylabel="force [N]", title="tension")
     rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
-    steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
+    steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu, config.coiling.sense))
     ax[1].plot(angle, h["hub_torque"] * 1e3, ".-", label="shell (secant of the energy balance)")
     if "hub_torque_reaction" in h:
         ax[1].plot(angle, h["hub_torque_reaction"] * 1e3, "-", label="shell (the root's reactions)")
@@ -179,7 +186,7 @@ def coil_profiles(directory: Path) -> Path | None:
     middle = coiled & np.isclose(data["xi1"], station, rtol=0, atol=1e-9)
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.4))
     s = data["xi1"][sel] * 1e3
-    sx_ref, sy_ref = theory.coil_stresses(rho[sel], tp.R, tp.E, tp.nu, h / 2)
+    sx_ref, sy_ref = np.abs(theory.coil_stresses(rho[sel], tp.R, tp.E, tp.nu, h / 2, config.coiling.sense))
     ax[0].plot(s, np.abs(data["kappa_long"][sel]) * rho[sel], ".", label="|kappa_long| x turn radius")
     ax[0].plot(s, np.abs(data["kappa_trans"][sel]) * tp.R, ".", label="|kappa_trans| x R (flat: 0)")
     ax[0].plot(s, np.abs(data["sigma_x"][sel]) / sx_ref, ".", label="|sigma_x| / plate theory")
@@ -192,7 +199,7 @@ def coil_profiles(directory: Path) -> Path | None:
         ylim=(-0.1, 1.4),
     )
     xi2 = data["xi2"][middle] / tp.b
-    sx_ref, sy_ref = theory.coil_stresses(rho[middle], tp.R, tp.E, tp.nu, h / 2)
+    sx_ref, sy_ref = np.abs(theory.coil_stresses(rho[middle], tp.R, tp.E, tp.nu, h / 2, config.coiling.sense))
     order = np.argsort(xi2)
     ax[1].plot(xi2[order], np.abs(data["sigma_x"][middle])[order] / 1e6, "o-", label="|sigma_x| shell")
     ax[1].plot(xi2[order], sx_ref[order] / 1e6, "--", label="sigma_x plate theory")
@@ -230,7 +237,8 @@ def deployment_lambda(directory: Path) -> Path | None:
     ode = deployment_reference(config, lam0)
     plate = deployment_reference(config, lam0, energy="plate")
     tt = np.linspace(0.0, max(t[-1], ode.t100), 400)
-    k_hub = theory.seffen_rate(tp.mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
+    mu = theory.coil_energy_at_R(tp.D, tp.nu, tp.R, config.coiling.sense)
+    k_hub = theory.seffen_rate(mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
     ax.plot(t, h["lambda"], lw=2, label="shell (lift-off point)")
     ax.plot(tt, theory.deployed_fraction(tt, k_hub), "--", label="Eq. 2.20, r = r_hub, lambda0 = 0")

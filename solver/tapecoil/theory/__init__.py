@@ -46,21 +46,26 @@ from tapecoil.theory.deployment import (
     solve_deployment_ode,
 )
 from tapecoil.theory.plate import (
+    SENSES,
     arc_second_moment,
+    coil_energy_at_R,
     coil_stresses,
     energy_density,
     flexural_rigidity,
     fold_moment,
     opposite_sense_energy_density,
     ploy_length,
+    sense_sign,
 )
 from tapecoil.theory.table import Prediction, predictions
 
 __all__ = [
+    "SENSES",
     "UNIQUENESS_LIMIT",
     "DeploymentSolution",
     "Prediction",
     "arc_second_moment",
+    "coil_energy_at_R",
     "coil_radius_during_deployment",
     "coil_rotary_inertia",
     "coil_stresses",
@@ -86,6 +91,7 @@ __all__ = [
     "required_coiling_tension",
     "rotation_for_coiled_length",
     "seffen_rate",
+    "sense_sign",
     "solve_deployment_ode",
     "stored_energy",
     "turn_radius",

@@ -20,17 +20,38 @@ def flexural_rigidity(E: float, h: float, nu: float) -> float:
     return E * h**3 / (12 * (1 - nu**2))
 
 
+SENSES = ("opposite", "equal")
+
+
+def sense_sign(sense: str) -> float:
+    """+1 for opposite-sense coiling, -1 for equal sense: the sign of the nu terms of the coil's
+    energy and stresses (physics brief Sec. 10: the curvature changes 1/rho of the coil and
+    1/R of the flattening have the same sign in opposite sense, opposite signs in equal sense)."""
+    if sense not in SENSES:
+        raise ValueError(f"coiling sense must be one of {SENSES}, got {sense!r}")
+    return 1.0 if sense == "opposite" else -1.0
+
+
 def opposite_sense_energy_density(D: float, nu: float, R: float) -> float:
     """mu = D (1 + nu) / R^2 [J/m^2]: energy per unit area of the opposite-sense coil of radius R."""
     return D * (1 + nu) / R**2
 
 
-def energy_density(rho: float | np.ndarray, R: float, D: float, nu: float) -> float | np.ndarray:
+def coil_energy_at_R(D: float, nu: float, R: float, sense: str = "opposite") -> float:
+    """w(R) = D (1 +- nu) / R^2 [J/m^2]: Seffen and Pellegrino's mu for either sense (the
+    D (1 -+ nu) of Eq. 2.17)."""
+    return D * (1 + sense_sign(sense) * nu) / R**2
+
+
+def energy_density(
+    rho: float | np.ndarray, R: float, D: float, nu: float, sense: str = "opposite"
+) -> float | np.ndarray:
     """Kirchhoff plate energy per unit area of a flattened section coiled to radius rho [J/m^2].
 
-    w(rho) = (D/2) (1/rho^2 + 1/R^2 + 2 nu / (rho R)); w(R) = mu (physics brief section 3).
+    w(rho) = (D/2) (1/rho^2 + 1/R^2 +- 2 nu / (rho R)), + for opposite sense (physics brief
+    Sec. 3), - for equal sense (Sec. 10); w(R) = :func:`coil_energy_at_R`.
     """
-    return 0.5 * D * (1 / rho**2 + 1 / R**2 + 2 * nu / (rho * R))
+    return 0.5 * D * (1 / rho**2 + 1 / R**2 + sense_sign(sense) * 2 * nu / (rho * R))
 
 
 def arc_second_moment(R: float, alpha: float, h: float) -> float:
@@ -54,14 +75,19 @@ def fold_moment(D: float, nu: float, alpha: float) -> float:
     return (1 + nu) * D * alpha
 
 
-def coil_stresses(rho: float, R: float, E: float, nu: float, z: float) -> tuple[float, float]:
+def coil_stresses(
+    rho: float, R: float, E: float, nu: float, z: float, sense: str = "opposite"
+) -> tuple[float, float]:
     """Plane-stress bending stresses (sigma_x, sigma_y) [Pa] at z in a coil of radius rho.
 
-    Curvature changes +1/rho (longitudinal) and +1/R (transverse, flattening): eps_x = z/rho,
-    eps_y = z/R. z > 0 on the outer face (see the module docstring); use z = +-h/2.
+    Opposite sense: curvature changes +1/rho (longitudinal) and +1/R (transverse, flattening),
+    eps_x = z/rho, eps_y = z/R. Equal sense: the flattening's is -1/R, eps_y = -z/R, so
+    sigma_x = c (1/rho - nu/R) and sigma_y = -c (1/R - nu/rho) (physics brief Sec. 10).
+    z > 0 on the outer face (see the module docstring); use z = +-h/2.
     """
     c = E / (1 - nu**2) * z
-    return c * (1 / rho + nu / R), c * (1 / R + nu / rho)
+    s = sense_sign(sense)
+    return c * (1 / rho + s * nu / R), s * c * (1 / R + s * nu / rho)
 
 
 def ploy_length(width: float, R: float, h: float, beta: float = 1.0) -> float:

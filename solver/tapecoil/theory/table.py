@@ -23,6 +23,7 @@ from tapecoil.theory.coiling_tension import (
 from tapecoil.theory.deployment import deployment_time, seffen_rate, solve_deployment_ode
 from tapecoil.theory.plate import (
     arc_second_moment,
+    coil_energy_at_R,
     coil_stresses,
     energy_density,
     fold_moment,
@@ -45,12 +46,13 @@ def predictions(config: Config) -> list[Prediction]:
     """Every analytic prediction of the physics brief for a configuration, in report order."""
     tp, r_hub = config.tape, config.hub.radius
     theta = config.coiling.hub_angle
-    D, mu, b = tp.D, tp.mu, tp.b
+    sense = config.coiling.sense
+    D, mu, b = tp.D, coil_energy_at_R(tp.D, tp.nu, tp.R, sense), tp.b
     r_final = outer_radius_after_rotation(theta, r_hub, tp.h)
     x_coiled = min(coiled_length_from_rotation(theta, r_hub, tp.h), tp.L)
     theta_coiled = rotation_for_coiled_length(x_coiled, r_hub, tp.h)
     rho_first = turn_radius(0, r_hub, tp.h)
-    sx, sy = coil_stresses(r_hub, tp.R, tp.E, tp.nu, tp.h / 2)
+    sx, sy = coil_stresses(r_hub, tp.R, tp.E, tp.nu, tp.h / 2, sense)
     k_hub = seffen_rate(mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
     k_coil = seffen_rate(mu, r_final, tp.R, tp.alpha, tp.rho_l, tp.L)
 
@@ -63,7 +65,13 @@ def predictions(config: Config) -> list[Prediction]:
     P = Prediction
     out = [
         P("D", "flexural rigidity D", D, "N m", "E h^3 / (12 (1 - nu^2))"),
-        P("mu", "energy density of an opposite-sense coil, mu", mu, "J/m^2", "D (1 + nu) / R^2"),
+        P(
+            "mu",
+            f"energy density of an {sense}-sense coil, mu",
+            mu,
+            "J/m^2",
+            f"D (1 {'+' if sense == 'opposite' else '-'} nu) / R^2",
+        ),
         P("b", "arc width b", b, "m", "R alpha"),
         P("density", "volume density", tp.density, "kg/m^3", "rho_l / (b h)"),
         P(
@@ -93,14 +101,14 @@ def predictions(config: Config) -> list[Prediction]:
         P(
             "w_first_turn",
             "energy density of the first turn w(r_hub + h/2)",
-            energy_density(rho_first, tp.R, D, tp.nu),
+            energy_density(rho_first, tp.R, D, tp.nu, sense),
             "J/m^2",
             "section 3",
         ),
         P(
             "stored_energy",
             "stored strain energy of the coiled length",
-            stored_energy(theta_coiled, r_hub, tp.h, tp.R, tp.alpha, D, tp.nu),
+            stored_energy(theta_coiled, r_hub, tp.h, tp.R, tp.alpha, D, tp.nu, sense),
             "J",
             "section 3",
         ),
