@@ -239,11 +239,12 @@ def free_hub_config(inertia: float, t_end: float = 0.004) -> Config:
 
 
 def short_tape_inertia(config) -> float:
-    """The short stowed tape's own rotary inertia about the hub's axis [kg m^2], about 4e-7."""
+    """The short tape's own rotary inertia were it wound whole (theory.stowed_rotary_inertia,
+    the J_tape of docs/deployment.md) [kg m^2], about 5.7e-7."""
     from tapecoil import theory
 
     tp = config.tape
-    return theory.coil_rotary_inertia(0.0, config.hub.radius + tp.h, config.hub.radius, tp.rho_l, tp.L)
+    return theory.stowed_rotary_inertia(config.hub.radius, tp.h, tp.L, tp.rho_l)
 
 
 @pytest.mark.mpi

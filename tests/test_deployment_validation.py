@@ -77,8 +77,7 @@ def free_hub_run(inertia_ratio: float, lambda_end: float, max_dt: float):
 
     config = load_config()
     tp, r_hub = config.tape, config.hub.radius
-    r0 = float(theory.coil_radius_during_deployment(0.0, r_hub, tp.h, tp.L))
-    inertia = inertia_ratio * theory.coil_rotary_inertia(0.0, r0, r_hub, tp.rho_l, tp.L)
+    inertia = inertia_ratio * theory.stowed_rotary_inertia(r_hub, tp.h, tp.L, tp.rho_l)
     config = dataclasses.replace(
         config,
         mesh=dataclasses.replace(config.mesh, preset="coarse"),

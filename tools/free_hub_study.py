@@ -4,8 +4,8 @@
 
 deploys the coarse benchmark from the coiling validation's stowed state
 (results/validate-coil-coarse, coiled first if it is not there) with the hub free to turn, of
-rotary inertia ``--inertia`` times the stowed tape's own (theory.coil_rotary_inertia at
-lambda = 0), into results/free-hub-J<inertia>, and prints the times and hub turns at
+rotary inertia ``--inertia`` times the stowed tape's own (theory.stowed_rotary_inertia), into
+results/free-hub-J<inertia>, and prints the times and hub turns at
 lambda = 0.2 ... 0.9 against the model with the plate energy, and the angular momentum kept;
 the hub's turn against lambda is drawn into free_hub.png there.
 """
@@ -43,8 +43,7 @@ def main() -> None:
     if not comm.allreduce(bool(ready), op=MPI.LAND):
         run_coiling(config, coil_dir, comm, progress=False)
     tp, r_hub = config.tape, config.hub.radius
-    r0 = float(theory.coil_radius_during_deployment(0.0, r_hub, tp.h, tp.L))
-    inertia = args.inertia * theory.coil_rotary_inertia(0.0, r0, r_hub, tp.rho_l, tp.L)
+    inertia = args.inertia * theory.stowed_rotary_inertia(r_hub, tp.h, tp.L, tp.rho_l)
     config = dataclasses.replace(
         config,
         hub=dataclasses.replace(config.hub, inertia=inertia),

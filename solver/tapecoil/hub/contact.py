@@ -185,6 +185,13 @@ class CoilContact:
         """Distance from the axis and swept angle (:meth:`HubFrame.polar`) of points (3, n)."""
         return self.frame.polar(points)
 
+    @property
+    def turns_with_hub(self) -> bool:
+        """Whether the obstacle's energy depends on the hub angle at a fixed tape: the surface
+        mode's fairing behind the root turns with the hub; the spiral obstacle is read from the
+        winding angles, which are the material's."""
+        return self.turns == "surface"
+
     def turn(self, hub_angle: float) -> None:
         """Place the hub (its fairing) at the hub angle ``hub_angle`` [rad] (while it turns)."""
         self.hub_turn.value = hub_angle

@@ -20,16 +20,16 @@ the Jacobian without conditions; K is symmetric, so G^T K = (K G)^T and
 
     dphi/dzeta = J (1 - alpha_m) / (beta dt^2) + G' . F + (K G) . w.
 
-The contact surfaces turn with the hub too: the spiral obstacle's climb over the root's step
-(and the surface contact's fairing behind the root) are fixed to it, so the penalty energy E of
-the obstacle depends on zeta at a fixed tape, and dE/dzeta, the torque the tape puts on them,
-joins phi (d2E/dzeta2 its derivative; its cross-derivative with q is left out, which only slows
-the convergence: phi itself is exact). Without it the tape's and the hub's angular momentum is
-not kept whenever the coil slides over the step.
+With the turns' real contact (``contact.turns = "surface"``) the hub carries a fairing behind
+the root, which turns with it: the penalty energy E against the hub then depends on zeta at a
+fixed tape, and dE/dzeta, the torque the tape puts on the fairing, joins phi (d2E/dzeta2 its
+derivative; its cross-derivative with q is left out, which only slows the convergence: phi
+itself is exact). The spiral obstacle is read from the winding angles, the material's, and
+adds no such torque (:attr:`CoilContact.turns_with_hub`).
 
 The step dzeta = -phi / phi' carries the tape along by w dzeta, so the next tape solve starts
 on its new equilibrium to first order and takes one or two iterations. The root's rates G and
-G' and the obstacle's dE/dzeta are central differences over ``angle_step``.
+G' and the fairing's dE/dzeta are central differences over ``angle_step``.
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ class FreeHubCoupling:
         plus, minus, here = self._prescribed(angle + e), self._prescribed(angle - e), self._prescribed(angle)
         return (plus - minus) / (2 * e), (plus - 2 * here + minus) / e**2
 
-    def _assemble(self, form) -> np.ndarray:
+    def _assemble(self, form) -> PETSc.Vec:
         with self._vec.localForm() as local:
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(self._vec, form)
@@ -97,13 +97,15 @@ class FreeHubCoupling:
         return self._vec
 
     def obstacle_torque(self, angle: float) -> tuple[float, float]:
-        """dE/dzeta and d2E/dzeta2 of the obstacle's contact energy at the state in place: the
-        torque [N m] the tape puts on the hub's contact surfaces (the climb over the root's
-        step turns with the hub), and its stiffness [N m/rad]; the obstacle left at ``angle``."""
+        """dE/dzeta and d2E/dzeta2 of the hub's contact energy at the state in place: the torque
+        [N m] the tape puts on the fairing that turns with the hub, and its stiffness
+        [N m/rad]; none without a fairing. The obstacle is left at ``angle``."""
+        if not self.contact.turns_with_hub:
+            return 0.0, 0.0
         e, energy = self.angle_step, []
         for a in (angle + e, angle - e, angle):
             self.contact.turn(a)
-            energy.append(self.m.tape.obstacle_energy())
+            energy.append(self.m.tape.hub_contact_energy())
         plus, minus, here = energy
         return (plus - minus) / (2 * e), (plus - 2 * here + minus) / e**2
 
@@ -148,7 +150,6 @@ class FreeHubCoupling:
             result = self.solver.solve()
             total += result.iterations
             if not result.converged:
-                self.place(rotor.new_angle)
                 return SolveResult(False, total, result.reason, result.residual_norm)
             rates, curvature = self.root_rates(rotor.new_angle)
             phi, size = self.residual(rates, rotor.new_angle)

@@ -120,12 +120,10 @@ class TapeOnHub:
         )
         return {"contact_hub": global_scalar(self.forms["contact_hub"], comm), "contact_coil": coil}
 
-    def obstacle_energy(self) -> float:
-        """The penalty energy against the hub and the spiral obstacle [J] (collective): the
-        contact energy that turns with the hub, without the turns' real contact."""
-        comm = self.model.mesh.comm
-        names = ("contact_hub", "contact_coil") if self.turns is None else ("contact_hub",)
-        return sum(global_scalar(self.forms[name], comm) for name in names if name in self.forms)
+    def hub_contact_energy(self) -> float:
+        """The penalty energy against the hub (with its fairing, in the surface mode) [J]
+        (collective)."""
+        return global_scalar(self.forms["contact_hub"], self.model.mesh.comm)
 
     def contact_energy(self) -> float:
         """The penalty energy of the hub's and the turns' contact [J] (collective)."""

@@ -44,6 +44,7 @@ from tapecoil.theory.deployment import (
     free_hub_factors,
     seffen_rate,
     solve_deployment_ode,
+    stowed_rotary_inertia,
 )
 from tapecoil.theory.plate import (
     SENSES,
@@ -94,5 +95,6 @@ __all__ = [
     "sense_sign",
     "solve_deployment_ode",
     "stored_energy",
+    "stowed_rotary_inertia",
     "turn_radius",
 ]

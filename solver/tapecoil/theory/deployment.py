@@ -9,6 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from tapecoil.theory.coil_geometry import radius_from_coiled_length
+
 
 def seffen_rate(mu: float, r: float, R: float, alpha: float, rho_l: float, L: float) -> float:
     """k = sqrt(6 mu r^2 R alpha / (rho_l L^4)) [1/s], the rate in lambda dlambda = k dt (Eq. 2.21)."""
@@ -48,6 +50,14 @@ def coil_rotary_inertia(lam: float, r: float, r_hub: float, rho_l: float, L: flo
     At lam = 0 it is the stowed tape's own rotary inertia on the coil.
     """
     return rho_l * L * ((1 - lam) * (r_hub**2 + r**2) / 2 + lam * r**2)
+
+
+def stowed_rotary_inertia(r_hub: float, h: float, L: float, rho_l: float) -> float:
+    """The stowed tape's own rotary inertia on the coil [kg m^2]: the whole length L wound from
+    r_hub to the radius r(0) of Eq. 4.3, rho_l L (r_hub^2 + r(0)^2) / 2
+    (:func:`coil_rotary_inertia` at lambda = 0)."""
+    r0 = float(radius_from_coiled_length(L, r_hub, h))
+    return coil_rotary_inertia(0.0, r0, r_hub, rho_l, L)
 
 
 def free_hub_factors(lam: float, r: float, hub_inertia: float, rho_l: float, L: float) -> tuple[float, float]:
