@@ -19,7 +19,7 @@ import warnings
 from tapecoil import __version__
 from tapecoil.app.commands.info import cmd_config, cmd_theory
 from tapecoil.app.commands.mesh import cmd_mesh
-from tapecoil.app.commands.runs import cmd_coil, cmd_deploy, cmd_report, cmd_run, cmd_sweep
+from tapecoil.app.commands.runs import cmd_coil, cmd_deploy, cmd_payout, cmd_report, cmd_run, cmd_sweep
 from tapecoil.app.commands.verify import cmd_verify
 from tapecoil.app.petsc_args import PETSC_EPILOG, hand_to_petsc, split_petsc_options
 from tapecoil.config import ConfigError, ConfigWarning
@@ -81,6 +81,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue from the results directory's deployed/")
     _common_run_options(p)
     p.set_defaults(func=cmd_deploy)
+
+    p = sub.add_parser(
+        "payout",
+        help="pay the tape out of a stowed checkpoint with a driven hub, the pull held (quasi-static)",
+    )
+    p.add_argument("stowed", help="stowed checkpoint directory (a coiling run's stowed/)")
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the one beside the checkpoint)")
+    p.add_argument("--out", help="results directory (default: <output.directory>/payout)")
+    _common_run_options(p)
+    p.set_defaults(func=cmd_payout)
 
     p = sub.add_parser("run", help="the whole pipeline: coil, stow, deploy")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")

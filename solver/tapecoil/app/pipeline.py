@@ -32,8 +32,9 @@ def run(
     """Run ``phases`` into ``directory`` and return its summary (also written as summary.json).
 
     ``phases``: ("coiling",), ("deployment",) (from the checkpoint ``stowed``) or both, the
-    deployment starting from the coiling's stowed state. ``resume``: go on from the directory's
-    own checkpoints (stowed/, deployed/) as if the run had never stopped; ``coiling_checkpoint``:
+    deployment starting from the coiling's stowed state; "payout" in place of "deployment" pays
+    the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`). ``resume``: go on
+    from the directory's own checkpoints (stowed/, deployed/) as if the run had never stopped; ``coiling_checkpoint``:
     resume the coiling from that checkpoint instead. A stop signal (see
     :mod:`tapecoil.core.interrupt`) ends the run after its current step with everything written and
     ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
@@ -41,7 +42,10 @@ def run(
     """
     from tapecoil.phases.coiling_run import run_coiling
     from tapecoil.phases.deployment_run import run_deployment
+    from tapecoil.phases.payout import run_payout
 
+    if "deployment" in phases and "payout" in phases:
+        raise ValueError("a run deploys the stowed tape or pays it out, not both")
     started = time.perf_counter()
     directory = results.prepare_directory(directory, config, comm)
     own_stowed, own_deployed = directory / "stowed", directory / "deployed"
@@ -77,6 +81,10 @@ def run(
                     progress=progress,
                     stop=stop,
                     resume=resume_deploy,
+                )
+            if "payout" in phases and (model is None or out["coiling"]["completed"]):
+                out["payout"], _ = run_payout(
+                    config, directory, comm, stowed=stowed, model=model, progress=progress, stop=stop
                 )
         from tapecoil.measures.separation import separation_measure
 

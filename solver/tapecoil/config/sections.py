@@ -309,6 +309,24 @@ class DeploymentConfig:
 
 
 @dataclass
+class PayoutConfig:
+    """A driven hub paying the tape out from the stowed state, quasi-static: the hub turned
+    back while the free end is held in tension, the way a motorised deployer extends a boom.
+
+    Attributes:
+        lambda_end: deployed fraction to pay out to [-], in (0, 1): the hub turns back to the
+            angle whose mid-surface spiral holds (1 - lambda_end) L.
+        tension: the pull held at the free end [N]; 0 keeps the coiling's (coiling.tension).
+        max_step: largest hub-angle step [rad]; 0 takes the coiling's (coiling.max_step, or the
+            predictor's own).
+    """
+
+    lambda_end: float = param(0.9, "-", Range(0.0, 1.0, True, True))
+    tension: float = param(0.0, "N", NON_NEGATIVE)
+    max_step: float = param(0.0, "rad", NON_NEGATIVE)
+
+
+@dataclass
 class OutputConfig:
     """Where and how often results are written.
 
@@ -340,6 +358,7 @@ class Config:
     solver: SolverConfig = field(default_factory=SolverConfig)
     contact: ContactConfig = field(default_factory=ContactConfig)
     deployment: DeploymentConfig = field(default_factory=DeploymentConfig)
+    payout: PayoutConfig = field(default_factory=PayoutConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
 
     def check(self) -> None:

@@ -327,6 +327,34 @@ def deployment_hub(directory: Path) -> Path | None:
     return free_hub_figure(h, config, lam0, figures / "deployment_hub.png")
 
 
+def payout_forces(directory: Path) -> Path | None:
+    """A driven hub's payout against lambda: T - N on the outer turn against Eq. 4.5 and Eq. 2.6 at
+    its measured radius, T - N at the root against Eq. 2.6 at the first turn, the hub torque from
+    the reactions against steady coiling."""
+    h = read_history(directory / "payout_history.csv")
+    if h is None or len(h["hub_angle"]) == 0:
+        return None
+    config, _, figures = _setup(directory)
+    tp = config.tape
+    lam = h["lambda"]
+    order = np.argsort(lam)
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
+    ax[0].plot(lam, h["coiling_tension_outer"], ".", ms=3, label="T - N on the outer turn (shell)")
+    ax[0].plot(lam[order], h["eq_4_5"][order], "k-", lw=1.2, label="Eq. 4.5, mid-surface radius rho(lambda)")
+    ax[0].plot(lam, h["eq_2_6_outer"], "k:", lw=1, label="Eq. 2.6 at the outer turn's measured radius")
+    ax[0].plot(lam, h["coiling_tension"], ".", ms=3, label="T - N at the root (shell)")
+    rho = config.hub.radius + tp.h / 2
+    root = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, rho)
+    ax[0].axhline(root, color="k", ls="--", lw=1, label=f"Eq. 2.6 at the first turn: {root:.3f} N")
+    ax[0].set(xlabel="deployed fraction lambda", ylabel="force [N]", title="coiling tension, driven hub")
+    ax[1].plot(lam, h["hub_torque_reaction"] * 1e3, ".", ms=3, label="shell (the root's reactions)")
+    ax[1].plot(
+        lam[order], h["steady_torque"][order] * 1e3, "k--", lw=1, label="steady coiling rho (T + b w(rho))"
+    )
+    ax[1].set(xlabel="deployed fraction lambda", ylabel="hub torque [N mm]", title="hub torque")
+    return _save(fig, figures / "payout_forces.png")
+
+
 FIGURES = (
     coiling_energies,
     coiling_forces,
@@ -336,6 +364,7 @@ FIGURES = (
     deployment_energies,
     deployment_root_loads,
     deployment_hub,
+    payout_forces,
 )
 
 

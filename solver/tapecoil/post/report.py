@@ -36,6 +36,9 @@ CAPTIONS = {
     "converged residual's work, negligible).",
     "deployment_root_loads": "The force and torque the tape exerts on the hub through its root, the "
     "attachment's reaction: what the hub and the spacecraft interface carry.",
+    "payout_forces": "A driven hub paying the tape out with the pull held: the coiling tension T - N "
+    "on the outer turn against Eq. 4.5 (the coil's growing radius) and at the root against Eq. 2.6; "
+    "the hub torque from the root's reactions against steady coiling.",
     "coiling_sequence": "Coiling, four snapshots; colour: longitudinal curvature times R.",
     "stowed": "The stowed coil after the last step.",
     "deployment_sequence": "Deployment, four snapshots.",
@@ -120,7 +123,7 @@ def _run_table(summary: dict) -> str:
         "<table><tr><th>phase</th><th>state</th><th>mesh</th><th>DOFs</th><th>ranks</th><th>steps</th>"
         "<th>Newton iterations</th><th>wall time</th></tr>"
     ]
-    for phase in ("coiling", "deployment"):
+    for phase in ("coiling", "deployment", "payout"):
         if phase not in summary:
             continue
         p, run = summary[phase], summary[phase]["run"]

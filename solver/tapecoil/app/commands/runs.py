@@ -1,4 +1,4 @@
-"""The commands that make or read a results directory: coil, deploy, run, sweep and report."""
+"""The commands that make or read a results directory: coil, deploy, payout, run, sweep and report."""
 
 from __future__ import annotations
 
@@ -22,6 +22,12 @@ def _print_phase(name: str, phase: dict, directory) -> None:
     if name == "coiling":
         state = "stowed" if phase["completed"] else f"STOPPED: {phase['message']}"
         where = f"coiling to {phase['hub_angle']:.4g} of {phase['target_hub_angle']:g} rad"
+    elif name == "payout":
+        state = "paid out" if phase["completed"] else f"STOPPED: {phase['message']}"
+        lam = phase["measures"]["lambda_end"]
+        where = (
+            f"payout to {phase['hub_angle']:.4g} of {phase['target_hub_angle']:.4g} rad (lambda = {lam:.3f})"
+        )
     else:
         state = "deployed" if phase["completed"] else f"STOPPED: {phase['message']}"
         where = f"deployment to lambda = {phase['lambda']:.3f} at t = {phase['time']:.4g} s"
@@ -35,6 +41,10 @@ def _print_phase(name: str, phase: dict, directory) -> None:
             echo(f"  {name_:<26} not reached; reference {reference:.5g}")
         else:
             echo(f"  {name_:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}")
+    if name == "payout":
+        for key, value in phase["measures"].items():
+            if isinstance(value, dict) and value.get("max_error") is not None:
+                echo(f"  {key:<32} largest error over the lambda bands {value['max_error']:.2%}")
     if name == "deployment":
         e = phase["measures"]["energy"]
         echo(
@@ -56,7 +66,7 @@ def _finish(args: argparse.Namespace, summary: dict, directory) -> int:
     if args.json:
         echo(json.dumps(summary, indent=2))
     else:
-        for name in ("coiling", "deployment"):
+        for name in ("coiling", "deployment", "payout"):
             if name in summary:
                 _print_phase(name, summary[name], directory)
         if summary["interrupted"]:
@@ -128,6 +138,24 @@ def cmd_deploy(args: argparse.Namespace) -> int:
         progress=not args.json,
         report=False if args.no_report else None,
         command="deploy",
+    )
+    return _finish(args, summary, directory)
+
+
+def cmd_payout(args: argparse.Namespace) -> int:
+    """Pay the tape out of a stowed checkpoint with a driven hub (quasi-static)."""
+    from tapecoil.app.pipeline import run
+
+    config = _stowed_config(args)
+    directory = args.out or f"{config.output.directory}/payout"
+    summary = run(
+        config,
+        directory,
+        phases=("payout",),
+        stowed=args.stowed,
+        progress=not args.json,
+        report=False if args.no_report else None,
+        command="payout",
     )
     return _finish(args, summary, directory)
 

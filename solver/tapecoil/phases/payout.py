@@ -1,0 +1,165 @@
+"""A driven hub paying the tape out of the coil: the hub turned back, the free end held in tension.
+
+The way a motorised deployer extends a boom, quasi-static: from the stowed state the hub turns
+back (:meth:`CoilingRun.coil` from the stowed angle down) while the pull at the free end is held
+(``payout.tension``), until the hub's angle is the one whose mid-surface spiral holds
+(1 - payout.lambda_end) L. Without friction the path is the coiling's, reversed.
+
+Each step's row is the coiling's (:mod:`tapecoil.phases.coiling_rows`) plus the axial force
+read across two sections of the tape (:mod:`tapecoil.measures.section_forces`), independently of
+the contact that loads them:
+
+- ``coiling_tension_outer``: T - N on the outermost turn, ``OUTER_STATION`` radians of winding
+  behind the tangent point, where the section is flat on the coil. By the configurational force
+  balance (physics brief Sec. 5) it is Eq. 2.6 at that turn's mid-surface radius, which is Eq.
+  4.5 with the coil's growing radius r(lambda): the tension the driven hub must hold for the
+  coil to stay wound as it pays out.
+- ``coiling_tension`` (the coiling's): T - N at the root, Eq. 2.6 at the first turn's radius.
+
+The hub torque (from the root's reactions) is compared with steady coiling, rho (T + b w(rho))
+with rho the outermost turn's mid-surface radius (:func:`tapecoil.measures.payout.payout_measures`).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+from tapecoil import theory
+from tapecoil.config import Config, ConfigError
+from tapecoil.core.dofs import global_size
+from tapecoil.measures.payout import outer_turn_tension, payout_measures
+from tapecoil.measures.section_forces import SectionForces
+from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
+from tapecoil.phases.coiling_run import CoilingRun
+from tapecoil.phases.runner import LOG, Phase, run_phase
+
+
+def payout_angle(config: Config) -> float:
+    """The hub angle [rad] at which the coil holds (1 - payout.lambda_end) L: the payout's end."""
+    tp = config.tape
+    return theory.rotation_for_coiled_length((1 - config.payout.lambda_end) * tp.L, config.hub.radius, tp.h)
+
+
+def check_payout(config: Config, stowed_angle: float) -> None:
+    """Refuse a payout that would not turn the hub back from ``stowed_angle`` (before computing)."""
+    target = payout_angle(config)
+    if target >= stowed_angle:
+        raise ConfigError(
+            f"payout.lambda_end = {config.payout.lambda_end:g} is already reached in the stowed state "
+            f"(hub angle {stowed_angle:.4g} rad; paying out to it stops at {target:.4g} rad): "
+            "choose a larger deployed fraction"
+        )
+
+
+class PayoutPhase(Phase):
+    """The driven hub's payout as a phase of :func:`~tapecoil.phases.runner.run_phase`."""
+
+    name, checkpoint_name, unit = "payout", "paid_out", "rad"
+
+    def __init__(self, model: CoilingModel, stop=None):
+        super().__init__()
+        config = model.config
+        self.model = model
+        self.start = model.root.angle
+        check_payout(config, self.start)
+        self.target = payout_angle(config)
+        self.pull = config.payout.tension or config.coiling.tension
+        self.run = CoilingRun(model, stop=stop, max_step=config.payout.max_step or None)
+        self.run.on_step = self._on_step
+        self.history = self.run.result.history
+        self.sections = SectionForces(model.model, model.tape.contact.nodes, model.comm)
+
+    def position(self) -> float:
+        return self.model.root.angle
+
+    def restart_state(self) -> dict:
+        return self.run.restart_state()
+
+    def checkpoint_meta(self) -> dict:
+        return {"hub_angle": self.model.root.angle, "tension": float(self.model.tension.value)}
+
+    def write_checkpoint(self, path: Path, meta: dict) -> None:
+        write_checkpoint(self.model, path, meta)
+
+    def _on_step(self, row: dict) -> None:
+        row["phase"] = "payout"
+        row.update(outer_turn_tension(self.model.tape, self.sections(), row, self.model.root.angle))
+        if self.on_row is not None:
+            self.on_row(row)
+
+    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
+        return row["hub_angle"], row["step"], row["newton_iterations"], f" lambda {row['lambda']:.3f}", True
+
+    def advance(self) -> None:
+        self.model.tension.value = self.pull
+        self.run.coil(self.target, start_angle=self.model.root.angle)
+        self.completed = True
+
+    def end_log(self, summary: dict) -> str:
+        line = super().end_log(summary)
+        return line + f", lambda {self.history[-1]['lambda']:.3f}" if self.history else line
+
+    def summary(self, interrupted, t_start: float) -> dict:
+        model, history = self.model, self.history
+        res, comm = model.strip.resolution, model.comm
+        timing = model.solver.timing_per_iteration()
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "hub_angle": model.root.angle,
+            "start_hub_angle": self.start,
+            "target_hub_angle": self.target,
+            "tension": self.pull,
+            "measures": payout_measures(model.config, history),
+            "run": {
+                "ranks": comm.size,
+                "dofs": global_size(model.model.W),
+                "mesh": f"{res.along} x {res.across}",
+                "predictor": model.predictor,
+                "steps": len(history),
+                "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
+                "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
+                "wall_time": history[-1]["wall_time"] if history else 0.0,
+                "process_wall_time": time.perf_counter() - t_start,
+                "assembly_per_iteration": timing["assembly"],
+                "linear_solve_per_iteration": timing["linear_solve"],
+            },
+        }
+
+
+def run_payout(
+    config: Config,
+    directory: str | Path,
+    comm=MPI.COMM_WORLD,
+    stowed: str | Path | None = None,
+    model: CoilingModel | None = None,
+    progress: bool = True,
+    stop=None,
+) -> tuple[dict, CoilingModel]:
+    """Pay the tape out from the stowed state into ``directory``; returns the summary and model.
+
+    The start is the coiling ``model`` in its stowed state, or the stowed checkpoint ``stowed``.
+    ``directory`` receives payout_history.csv, payout.bp, snapshots and paid_out/ (the final
+    checkpoint).
+    """
+    t_start = time.perf_counter()
+    if model is None:
+        if stowed is None:
+            raise ValueError("a payout needs a stowed checkpoint directory or a stowed coiling model")
+        model, _ = read_checkpoint(stowed, config, comm)
+    phase = PayoutPhase(model, stop)
+    LOG.info(
+        "payout: from %.6g rad to %.6g rad (lambda = %g), pull %g N, %d dofs on %d rank(s)",
+        phase.start,
+        phase.target,
+        config.payout.lambda_end,
+        phase.pull,
+        global_size(model.model.W),
+        comm.size,
+    )
+    summary = run_phase(phase, directory, config, comm, model.model, None, progress, t_start)
+    return summary, model

@@ -1,0 +1,146 @@
+"""A driven hub paying the tape out, and the axial force read across the tape's sections."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from tapecoil.config import CoilingConfig, Config, ConfigError, PayoutConfig, TapeConfig
+
+
+def short_tape(hub_angle=3.0, L=0.12, lambda_end=0.9) -> Config:
+    """The benchmark section on a short tape, coarse mesh: a run of seconds."""
+    cfg = Config()
+    return dataclasses.replace(
+        cfg,
+        tape=dataclasses.replace(TapeConfig(), L=L),
+        coiling=dataclasses.replace(CoilingConfig(), hub_angle=hub_angle),
+        payout=dataclasses.replace(PayoutConfig(), lambda_end=lambda_end),
+        mesh=dataclasses.replace(cfg.mesh, preset="coarse"),
+    )
+
+
+def _flattened(comm):
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+
+    model = CoilingModel(short_tape(), comm)
+    CoilingRun(model).flatten()
+    return model
+
+
+def test_axial_force_in_the_free_part_is_the_pull():
+    """Flattened onto the hub with the pull T = 1 N: beyond the root's ploy region nothing but the
+    pull acts along the tape, so statics asks N = T across every section there. The sections'
+    force is read from the strain energy of the cells the cut passes through, which knows nothing
+    of the pull (and, at the free end's last cut, equals the end's internal force: a consistency
+    check of the reading)."""
+    from tapecoil.measures.section_forces import SectionForces
+
+    model = _flattened(MPI.COMM_SELF)
+    sections = SectionForces(model.model, model.tape.contact.nodes, MPI.COMM_SELF)()
+    pull = model.config.coiling.tension
+    free = sections["xi1"] > 0.06
+    assert np.abs(sections["axial_force"][free] - pull).max() < 2e-3 * pull
+    # the force across the last cut along the guide (+x) is the end's
+    assert sections["force"][-1, 0] == pytest.approx(model.edge_forces()["tension"], rel=1e-9)
+    # the cuts' tangents point along the tape, towards the free end
+    assert np.all(sections["tangent"][free, 0] > 0.99)
+
+
+@pytest.mark.mpi
+def test_two_ranks_read_the_sections_as_one():
+    from tapecoil.measures.section_forces import SectionForces
+
+    out = []
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        model = _flattened(comm)
+        out.append(SectionForces(model.model, model.tape.contact.nodes, comm)())
+    assert MPI.COMM_WORLD.size > 1
+    np.testing.assert_allclose(out[0]["xi1"], out[1]["xi1"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out[0]["axial_force"], out[1]["axial_force"], rtol=1e-6, atol=1e-8)
+
+
+@pytest.fixture(scope="module")
+def paid_out(tmp_path_factory):
+    """The short tape coiled by 3 rad and paid out to lambda = 0.9 through the pipeline."""
+    from tapecoil.app.pipeline import run
+
+    directory = tmp_path_factory.mktemp("payout")
+    summary = run(short_tape(), directory, phases=("coiling", "payout"), comm=MPI.COMM_SELF, progress=False)
+    return directory, summary
+
+
+def test_payout_turns_the_hub_back_to_the_deployed_fraction(paid_out):
+    from tapecoil import theory
+
+    directory, summary = paid_out
+    payout, cfg = summary["payout"], short_tape()
+    assert summary["completed"] and payout["completed"]
+    assert payout["start_hub_angle"] == pytest.approx(3.0)
+    assert payout["tension"] == cfg.coiling.tension  # payout.tension = 0: the coiling's pull
+    target = theory.rotation_for_coiled_length(0.1 * cfg.tape.L, cfg.hub.radius, cfg.tape.h)
+    assert payout["hub_angle"] == pytest.approx(target)
+    # lambda read from the contact (the deployment's lift-off) reaches the configured fraction
+    assert payout["measures"]["lambda_end"] == pytest.approx(0.9, abs=0.08)
+    assert payout["measures"]["lambda_start"] < payout["measures"]["lambda_end"] - 0.1
+    rows = (directory / "payout_history.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    for key in ("coiling_tension_outer", "eq_4_5", "steady_torque", "hub_torque_reaction", "lambda"):
+        assert key in header
+    angles = [float(r.split(",")[header.index("hub_angle")]) for r in rows[1:]]
+    assert np.all(np.diff(angles) < 0)
+    assert (directory / "paid_out" / "meta.json").is_file()
+    assert json.loads((directory / "summary.json").read_text())["payout"]["completed"]
+
+
+def test_payout_hub_torque_is_steady_coilings(paid_out):
+    """The hub torque read from the root's reactions (not from the energy balance) against steady
+    coiling rho (T + b w(rho)), the energy balance of a step with rho the outer turn's measured
+    radius: paying out frictionless and quasi-static is coiling reversed. Within 5 % in every
+    band of lambda (coarse mesh: the per-step value oscillates by about 10 % as nodes pass the
+    tangent point, and the bands' means carry it)."""
+    measure = paid_out[1]["payout"]["measures"]["hub_torque_vs_steady"]
+    assert len(measure["bands"]) >= 2
+    assert measure["max_error"] < 0.05
+
+
+def test_payout_figure_is_drawn(paid_out):
+    from tapecoil.post.plots import payout_forces
+
+    path = payout_forces(paid_out[0])
+    assert path is not None and path.stat().st_size > 10_000
+
+
+def test_payout_that_deploys_nothing_is_refused_before_computing():
+    from tapecoil.phases.payout import check_payout, payout_angle
+
+    cfg = short_tape(lambda_end=0.2)  # 3 rad wound hold 0.04 m of 0.12: lambda 0.67 already
+    with pytest.raises(ConfigError, match=r"payout\.lambda_end"):
+        check_payout(cfg, 3.0)
+    assert payout_angle(short_tape(lambda_end=0.9)) < 3.0
+    with pytest.raises(ConfigError, match=r"payout\.lambda_end"):
+        short_tape(lambda_end=1.0).check()
+
+
+def test_payout_keys_act():
+    """payout.tension sets the pull held while paying out, payout.max_step the largest step; left
+    at 0 they take the coiling's."""
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+    from tapecoil.phases.payout import PayoutPhase
+
+    cfg = short_tape(hub_angle=0.3, lambda_end=0.99)
+    cfg = dataclasses.replace(cfg, payout=dataclasses.replace(cfg.payout, tension=1.5, max_step=0.05))
+    model = CoilingModel(cfg, MPI.COMM_SELF)
+    run = CoilingRun(model)
+    run.flatten()
+    run.coil(0.3)
+    phase = PayoutPhase(model)
+    assert phase.pull == 1.5 and phase.run.max_step == 0.05
+    phase.advance()
+    assert float(model.tension.value) == 1.5
+    assert all(abs(r["step"]) <= 0.05 + 1e-12 for r in phase.history)
+    assert phase.history[-1]["tension"] == pytest.approx(1.5, rel=1e-6)
