@@ -34,8 +34,8 @@ def run(
     ``phases``: ("coiling",), ("deployment",) (from the checkpoint ``stowed``) or both, the
     deployment starting from the coiling's stowed state; "payout" in place of "deployment" pays
     the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`). ``resume``: go on
-    from the directory's own checkpoints (stowed/, deployed/) as if the run had never stopped; ``coiling_checkpoint``:
-    resume the coiling from that checkpoint instead. A stop signal (see
+    from the directory's own checkpoints (stowed/, deployed/) as if the run had never stopped;
+    ``coiling_checkpoint``: resume the coiling from that checkpoint instead. A stop signal (see
     :mod:`tapecoil.core.interrupt`) ends the run after its current step with everything written and
     ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
     ``output.report``; rank 0, after the computation).
