@@ -8,6 +8,9 @@ prints DOFs, steps, Newton iterations, wall time and the validated measures.
 --case deploy: the deployment from the stowed state of --case coil on the same mesh and rank
 count (results/bench-coil-<mesh>-np<N>/stowed; run that first) to lambda = 1, into
 results/bench-deploy-*; the same figures.
+--case payout: a driven hub paying the tape out of the same stowed state to lambda = 0.9 with
+the pull held, into results/bench-payout-*; the same figures and the largest error of each of
+its measures over the bands of lambda.
 Run under mpirun for parallel figures: `make bench CASE=coil MESH=default NP=2`.
 """
 
@@ -27,16 +30,17 @@ parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
 parser.add_argument("--angle", type=float, default=1.0, help="final end rotation [rad]")
 parser.add_argument("--json", action="store_true")
-parser.add_argument("--case", default="fold", choices=("fold", "coil", "deploy"))
+parser.add_argument("--case", default="fold", choices=("fold", "coil", "deploy", "payout"))
 args = parser.parse_args()
 machine = f"{platform.machine()}, {platform.processor() or 'cpu'}, {MPI.COMM_WORLD.size} rank(s)"
 
-if args.case in ("coil", "deploy"):
+if args.case in ("coil", "deploy", "payout"):
     import dataclasses
     from pathlib import Path
 
     from tapecoil.phases.coiling_run import run_coiling
     from tapecoil.phases.deployment_run import run_deployment
+    from tapecoil.phases.payout import run_payout
 
     config = load_config()
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset=args.mesh))
@@ -49,9 +53,13 @@ if args.case in ("coil", "deploy"):
             raise SystemExit(
                 f"no stowed state in {coil_dir}: run `make bench CASE=coil` with the same MESH and NP"
             )
-        out = f"results/bench-deploy-{args.mesh}-np{MPI.COMM_WORLD.size}"
-        summary, _ = run_deployment(config, out, stowed=coil_dir / "stowed", progress=False)
-        case = "deployment from the stowed state to lambda = 1"
+        out = f"results/bench-{args.case}-{args.mesh}-np{MPI.COMM_WORLD.size}"
+        if args.case == "deploy":
+            summary, _ = run_deployment(config, out, stowed=coil_dir / "stowed", progress=False)
+            case = "deployment from the stowed state to lambda = 1"
+        else:
+            summary, _ = run_payout(config, out, stowed=coil_dir / "stowed", progress=False)
+            case = f"driven-hub payout from the stowed state to lambda = {config.payout.lambda_end:g}"
     run = summary["run"]
     report = {
         "case": case,
@@ -63,6 +71,8 @@ if args.case in ("coil", "deploy"):
     for name, value in summary["measures"].items():
         if isinstance(value, dict) and value.get("error") is not None:
             report[f"{name} (error)"] = value["error"]
+        if isinstance(value, dict) and value.get("max_error") is not None:
+            report[f"{name} (largest error)"] = value["max_error"]
     if MPI.COMM_WORLD.rank == 0:
         for key, value in report.items():
             print(f"{key:<36} {value:.4g}" if isinstance(value, float) else f"{key:<36} {value}")
