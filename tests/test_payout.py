@@ -144,3 +144,26 @@ def test_payout_keys_act():
     assert float(model.tension.value) == 1.5
     assert all(abs(r["step"]) <= 0.05 + 1e-12 for r in phase.history)
     assert phase.history[-1]["tension"] == pytest.approx(1.5, rel=1e-6)
+
+
+@pytest.mark.mpi
+def test_two_ranks_pay_out_as_one():
+    """The same short payout distributed over the ranks and on each rank alone."""
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+    from tapecoil.phases.payout import PayoutPhase
+
+    def pay_out(comm):
+        model = CoilingModel(short_tape(hub_angle=1.0, lambda_end=0.96), comm)
+        run = CoilingRun(model)
+        run.flatten()
+        run.coil(1.0)
+        phase = PayoutPhase(model)
+        phase.advance()
+        return phase.history[-1]
+
+    parallel, serial = pay_out(MPI.COMM_WORLD), pay_out(MPI.COMM_SELF)
+    assert MPI.COMM_WORLD.size > 1
+    assert parallel["hub_angle"] == serial["hub_angle"]
+    for key in ("coiling_tension_outer", "coiling_tension", "hub_torque_reaction", "lambda", "strain_energy"):
+        assert parallel[key] == pytest.approx(serial[key], rel=1e-6, abs=1e-9), key

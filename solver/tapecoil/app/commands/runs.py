@@ -70,7 +70,11 @@ def _finish(args: argparse.Namespace, summary: dict, directory) -> int:
             if name in summary:
                 _print_phase(name, summary[name], directory)
         if summary["interrupted"]:
-            echo(f"interrupted ({summary['interrupted']}): continue with --resume")
+            # a payout has no --resume: its checkpoint (paid_out/) is a stowed state to start from
+            hint = (
+                "continue with --resume" if hasattr(args, "resume") else "its last state is in the checkpoint"
+            )
+            echo(f"interrupted ({summary['interrupted']}): {hint}")
     return exit_status(summary)
 
 
