@@ -167,3 +167,56 @@ def test_two_ranks_pay_out_as_one():
     assert parallel["hub_angle"] == serial["hub_angle"]
     for key in ("coiling_tension_outer", "coiling_tension", "hub_torque_reaction", "lambda", "strain_energy"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-6, abs=1e-9), key
+
+
+SHORT_PAYOUT = (
+    "[tape]\nL = 0.12\n[coiling]\nhub_angle = 2.0\n[mesh]\npreset = 'coarse'\n"
+    "[payout]\nlambda_end = 0.95\n[output]\nvtx_every = 2\ncheckpoint_every = 2\nreport = false\n"
+)
+
+
+def test_a_stopped_payout_resumes_to_the_same_result(tmp_path):
+    """SIGTERM during a payout: it stops after its step with paid_out/ written (exit 143), and
+    tapecoil payout --resume finishes it with the history of a payout never stopped."""
+    import csv
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from tapecoil.app.cli import main
+
+    path = tmp_path / "short.toml"
+    path.write_text(SHORT_PAYOUT)
+    coil = tmp_path / "coil"
+    assert main(["coil", str(path), "--out", str(coil), "--json", "--no-report"]) == 0
+    stowed = str(coil / "stowed")
+
+    def payout(out, *extra, **kw):
+        cmd = [sys.executable, "-m", "tapecoil", "payout", stowed, "--out", str(out), "--json", *extra]
+        return subprocess.Popen(cmd, **kw)
+
+    whole, stopped = tmp_path / "whole", tmp_path / "stopped"
+    assert payout(whole, stdout=subprocess.DEVNULL).wait() == 0
+    proc = payout(stopped, stdout=subprocess.PIPE)
+    log, deadline = stopped / "run.log", time.monotonic() + 120
+    while not (log.is_file() and log.read_text().count("payout rad = ") >= 5):
+        assert proc.poll() is None and time.monotonic() < deadline, (
+            "the payout ended before it could be stopped"
+        )
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGTERM)
+    out, _ = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signal.SIGTERM
+    assert json.loads(out)["interrupted"] == "SIGTERM"
+    assert (stopped / "paid_out" / "meta.json").is_file()
+    assert payout(stopped, "--resume", stdout=subprocess.DEVNULL).wait() == 0
+    ha = list(csv.DictReader((whole / "payout_history.csv").open()))
+    hb = list(csv.DictReader((stopped / "payout_history.csv").open()))
+    assert len(ha) == len(hb)
+    for ra, rb in zip(ha, hb, strict=True):
+        for key in ("hub_angle", "strain_energy", "coiling_tension_outer", "lambda"):
+            assert float(rb[key]) == pytest.approx(float(ra[key]), rel=1e-8, abs=1e-14), key
+    a = json.loads((whole / "summary.json").read_text())["payout"]
+    b = json.loads((stopped / "summary.json").read_text())["payout"]
+    assert b["completed"] and b["start_hub_angle"] == a["start_hub_angle"] == pytest.approx(2.0)

@@ -29,13 +29,21 @@ parser.add_argument("--angle", type=float, default=3.4, help="final hub angle [r
 parser.add_argument("--from", dest="start", type=float, default=2.6, help="first hub angle measured [rad]")
 parser.add_argument("--step", type=float, default=0.05, help="largest hub-angle step [rad]")
 parser.add_argument("--smoothing", type=float, default=0.0, help="contact.smoothing [-]")
+parser.add_argument(
+    "--thickness",
+    type=float,
+    default=0.0,
+    help="tape thickness [m] (0: the benchmark's); the pull is scaled with D, as h^3",
+)
 args = parser.parse_args()
 
 base = Config()
+h = args.thickness or base.tape.h
+pull = base.coiling.tension * (h / base.tape.h) ** 3
 config = dataclasses.replace(
     base,
-    tape=dataclasses.replace(TapeConfig(), L=args.length),
-    coiling=dataclasses.replace(CoilingConfig(), hub_angle=args.angle, max_step=args.step),
+    tape=dataclasses.replace(TapeConfig(), L=args.length, h=h),
+    coiling=dataclasses.replace(CoilingConfig(), hub_angle=args.angle, max_step=args.step, tension=pull),
     contact=dataclasses.replace(ContactConfig(), smoothing=args.smoothing),
     mesh=dataclasses.replace(base.mesh, preset="default", elements_across=args.across),
 )
@@ -65,7 +73,7 @@ law = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, config.hub.radius + t
 values = np.array(readings)
 res = model.strip.resolution
 if comm.rank == 0:
-    print(f"mesh {res.along} x {res.across}, {len(values)} steps from {args.start:g} to {args.angle:g} rad")
+    print(f"h = {h:g} m, pull {pull:.4g} N; mesh {res.along} x {res.across}, {len(values)} steps")
     print(f"Eq. 2.6 at the first turn's mid-surface radius: {law:.4f} N")
     names = ["root (reaction)"] + [f"section {s:g} rad from the root" for s in stations]
     for k, name in enumerate(names, start=1):

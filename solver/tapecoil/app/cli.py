@@ -89,6 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("stowed", help="stowed checkpoint directory (a coiling run's stowed/)")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the one beside the checkpoint)")
     p.add_argument("--out", help="results directory (default: <output.directory>/payout)")
+    p.add_argument("--resume", action="store_true", help="continue from the results directory's paid_out/")
     _common_run_options(p)
     p.set_defaults(func=cmd_payout)
 

@@ -34,7 +34,7 @@ def run(
     ``phases``: ("coiling",), ("deployment",) (from the checkpoint ``stowed``) or both, the
     deployment starting from the coiling's stowed state; "payout" in place of "deployment" pays
     the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`). ``resume``: go on
-    from the directory's own checkpoints (stowed/, deployed/) as if the run had never stopped;
+    from the directory's own checkpoints (stowed/, deployed/, paid_out/) as if the run had never stopped;
     ``coiling_checkpoint``: resume the coiling from that checkpoint instead. A stop signal (see
     :mod:`tapecoil.core.interrupt`) ends the run after its current step with everything written and
     ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
@@ -83,8 +83,23 @@ def run(
                     resume=resume_deploy,
                 )
             if "payout" in phases and (model is None or out["coiling"]["completed"]):
+                own_paid_out = directory / "paid_out"
+                resume_payout = None
+                if (
+                    resume
+                    and is_checkpoint(own_paid_out)
+                    and read_meta(own_paid_out).get("phase") == "payout"
+                ):
+                    resume_payout = own_paid_out
                 out["payout"], _ = run_payout(
-                    config, directory, comm, stowed=stowed, model=model, progress=progress, stop=stop
+                    config,
+                    directory,
+                    comm,
+                    stowed=stowed,
+                    model=model,
+                    progress=progress,
+                    stop=stop,
+                    resume=resume_payout,
                 )
         from tapecoil.measures.separation import separation_measure
 

@@ -59,16 +59,19 @@ class PayoutPhase(Phase):
 
     name, checkpoint_name, unit = "payout", "paid_out", "rad"
 
-    def __init__(self, model: CoilingModel, stop=None):
+    def __init__(self, model: CoilingModel, stop=None, restart: dict | None = None):
         super().__init__()
         config = model.config
         self.model = model
-        self.start = model.root.angle
+        # a restart goes on from the stopped payout's state towards the same end
+        self.start = model.root.angle if restart is None else restart["start_hub_angle"]
         check_payout(config, self.start)
         self.target = payout_angle(config)
         self.pull = config.payout.tension or config.coiling.tension
         self.run = CoilingRun(model, stop=stop, max_step=config.payout.max_step or None)
         self.run.on_step = self._on_step
+        if restart is not None:
+            self.run.restore(restart)
         self.history = self.run.result.history
         self.sections = SectionForces(model.model, model.tape.contact.nodes, model.comm)
 
@@ -76,7 +79,7 @@ class PayoutPhase(Phase):
         return self.model.root.angle
 
     def restart_state(self) -> dict:
-        return self.run.restart_state()
+        return {**self.run.restart_state(), "start_hub_angle": self.start}
 
     def checkpoint_meta(self) -> dict:
         return {"hub_angle": self.model.root.angle, "tension": float(self.model.tension.value)}
@@ -95,7 +98,7 @@ class PayoutPhase(Phase):
 
     def advance(self) -> None:
         self.model.tension.value = self.pull
-        self.run.coil(self.target, start_angle=self.model.root.angle)
+        self.run.coil(self.target, start_angle=self.model.root.angle, first_step=self.run.next_step)
         self.completed = True
 
     def end_log(self, summary: dict) -> str:
@@ -139,19 +142,30 @@ def run_payout(
     model: CoilingModel | None = None,
     progress: bool = True,
     stop=None,
+    resume: str | Path | None = None,
 ) -> tuple[dict, CoilingModel]:
     """Pay the tape out from the stowed state into ``directory``; returns the summary and model.
 
-    The start is the coiling ``model`` in its stowed state, or the stowed checkpoint ``stowed``.
-    ``directory`` receives payout_history.csv, payout.bp, snapshots and paid_out/ (the final
-    checkpoint).
+    The start is the coiling ``model`` in its stowed state, or the stowed checkpoint ``stowed``;
+    ``resume``: a payout's own checkpoint (paid_out/) to go on from as if never stopped.
+    ``directory`` receives payout_history.csv, payout.bp, snapshots and paid_out/ (the latest
+    converged state, every ``output.checkpoint_every`` steps and at the end).
     """
     t_start = time.perf_counter()
-    if model is None:
+    restart = None
+    if resume is not None:
+        model, meta = read_checkpoint(resume, config, comm)
+        restart = meta.get("run")
+        if meta.get("phase") != "payout" or restart is None:
+            raise ValueError(f"{resume} holds no payout restart state")
+    elif model is None:
         if stowed is None:
             raise ValueError("a payout needs a stowed checkpoint directory or a stowed coiling model")
         model, _ = read_checkpoint(stowed, config, comm)
-    phase = PayoutPhase(model, stop)
+    phase = PayoutPhase(model, stop, restart)
+    if restart is not None and meta["completed"]:
+        phase.completed = True  # nothing left to do: the summary of the checkpoint's state
+        return phase.summary(None, t_start), model
     LOG.info(
         "payout: from %.6g rad to %.6g rad (lambda = %g), pull %g N, %d dofs on %d rank(s)",
         phase.start,
@@ -161,5 +175,5 @@ def run_payout(
         global_size(model.model.W),
         comm.size,
     )
-    summary = run_phase(phase, directory, config, comm, model.model, None, progress, t_start)
+    summary = run_phase(phase, directory, config, comm, model.model, restart, progress, t_start)
     return summary, model

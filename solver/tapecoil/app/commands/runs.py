@@ -152,10 +152,13 @@ def cmd_payout(args: argparse.Namespace) -> int:
 
     config = _stowed_config(args)
     directory = args.out or f"{config.output.directory}/payout"
+    if args.resume:
+        _resume_path("", directory, "paid_out")
     summary = run(
         config,
         directory,
         phases=("payout",),
+        resume=args.resume,
         stowed=args.stowed,
         progress=not args.json,
         report=False if args.no_report else None,
