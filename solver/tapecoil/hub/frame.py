@@ -24,8 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tapecoil.core.rotation import rotation_matrix
-
-SENSES = ("opposite", "equal")
+from tapecoil.theory.plate import SENSES
 
 
 @dataclass(frozen=True)

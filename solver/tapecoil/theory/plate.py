@@ -21,6 +21,8 @@ def flexural_rigidity(E: float, h: float, nu: float) -> float:
 
 
 SENSES = ("opposite", "equal")
+"""The coiling senses, for the theory and the hub's frame (the configuration, which the theory
+imports, lists them in its own allowed values)."""
 
 
 def sense_sign(sense: str) -> float:
