@@ -216,7 +216,10 @@ def test_a_stopped_payout_resumes_to_the_same_result(tmp_path):
     assert len(ha) == len(hb)
     for ra, rb in zip(ha, hb, strict=True):
         for key in ("hub_angle", "strain_energy", "coiling_tension_outer", "lambda"):
-            assert float(rb[key]) == pytest.approx(float(ra[key]), rel=1e-8, abs=1e-14), key
+            if ra[key] == "":  # no outer-turn station on a coil this short
+                assert rb[key] == "", key
+            else:
+                assert float(rb[key]) == pytest.approx(float(ra[key]), rel=1e-8, abs=1e-14), key
     a = json.loads((whole / "summary.json").read_text())["payout"]
     b = json.loads((stopped / "summary.json").read_text())["payout"]
     assert b["completed"] and b["start_hub_angle"] == a["start_hub_angle"] == pytest.approx(2.0)

@@ -147,6 +147,9 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
                 raise NonFiniteStateError(f"non-finite {key} in a history row; not written")
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else [])
+        # every row's columns, in order of appearance: a history continued from an older
+        # checkpoint may lack columns of the rows after it (left empty there)
+        fields = list(dict.fromkeys(key for row in rows for key in row))
+        writer = csv.DictWriter(f, fieldnames=fields, restval="")
         writer.writeheader()
         writer.writerows(rows)

@@ -34,6 +34,10 @@ CLIMB_CLEARANCE = 1.0
 """Winding [rad] kept between the station and the place where the outer turn climbs over the
 root end: the obstacle's ramp there bends the tape and disturbs N over about a radian."""
 
+STATION_MARGIN = 0.25
+"""Winding [rad] kept between the outer turn's station and the root; below OUTER_STATION[0] +
+STATION_MARGIN of hub angle there is no station and the outer turn's columns are empty."""
+
 LAMBDA_BANDS = tuple(round(0.1 * k, 1) for k in range(1, 10))
 
 
@@ -58,21 +62,36 @@ def steady_torque(rho: float, pull: float, config) -> float:
 
 def _station(angle: float) -> float:
     """The winding behind the tangent point [rad] at which to read the outer turn: in
-    OUTER_STATION and as far as the band allows from the outer turn's climb over the root end,
-    which lies (hub angle mod 2 pi) behind the tangent point."""
+    OUTER_STATION (cut short so that it stays STATION_MARGIN ahead of the root) and as far as the
+    band allows from the outer turn's climb over the root end, which lies (hub angle mod 2 pi)
+    behind the tangent point."""
     climb = angle % (2 * math.pi)
-    candidates = np.linspace(*OUTER_STATION, 41)
+    candidates = np.linspace(OUTER_STATION[0], min(OUTER_STATION[1], angle - STATION_MARGIN), 41)
     gap = np.abs(candidates - climb)
     gap = np.minimum(gap, 2 * math.pi - gap)
     return float(candidates[np.argmax(gap)])
 
 
-def outer_turn_tension(tape, sections: dict, row: dict, angle: float) -> dict:
-    """The history columns of the outer turn at the current state (collective).
+OUTER_TURN_COLUMNS = (
+    "station_winding",
+    "outer_turn_radius",
+    "coiling_tension_outer",
+    "eq_2_6_outer",
+    "eq_4_5",
+    "steady_torque",
+)
 
-    ``sections``: a :class:`~tapecoil.measures.section_forces.SectionForces` reading; ``row``
-    the coiling row of the step (its ``tension``, ``lambda`` and ``hub_torque_reaction``).
+
+def outer_turn_tension(tape, sections, pull: float, lam: float, angle: float) -> dict:
+    """The history columns of the outer turn (OUTER_TURN_COLUMNS) at the current state, empty
+    where the coil is too short for a station (collective).
+
+    ``sections``: the tape's :class:`~tapecoil.measures.section_forces.SectionForces`; ``pull``
+    the tension at the free end [N], ``lam`` the deployed fraction, ``angle`` the hub angle.
     """
+    if angle < OUTER_STATION[0] + STATION_MARGIN:
+        return dict.fromkeys(OUTER_TURN_COLUMNS, "")
+    sections = sections()
     config = tape.config
     line = tape.centre_line()
     radius, _ = tape.contact.polar(sections["columns"].T)
@@ -81,19 +100,18 @@ def outer_turn_tension(tape, sections: dict, row: dict, angle: float) -> dict:
     behind = _station(angle)
     k = int(np.argmin(np.abs(psi - (angle - behind))))
     rho = float(cut_radius[k])
-    pull = row["tension"]
     return {
         "station_winding": behind,
         "outer_turn_radius": rho,
         "coiling_tension_outer": pull - float(sections["axial_force"][k]),
         "eq_2_6_outer": float(tension_law(rho, config)),
-        "eq_4_5": float(eq_4_5(row["lambda"], config)),
+        "eq_4_5": float(eq_4_5(lam, config)),
         "steady_torque": steady_torque(rho, pull, config),
     }
 
 
 def _band(rows: list[dict], lo: float, hi: float, key: str, reference) -> dict | None:
-    band = [r for r in rows if lo <= r["lambda"] < hi and r.get(key, "") != ""]
+    band = [r for r in rows if lo <= r["lambda"] < hi and r.get(key, "") != "" and reference(r) != ""]
     if not band:
         return None
     values = np.array([float(r[key]) for r in band])
@@ -122,7 +140,7 @@ def payout_measures(config, history: list[dict]) -> dict:
         "root_tension_vs_eq_2_6": ("coiling_tension", lambda r: root_law),
         "hub_torque_vs_steady": ("hub_torque_reaction", lambda r: r["steady_torque"]),
     }
-    rows = [r for r in history if "eq_4_5" in r]
+    rows = [r for r in history if r.get("phase") == "payout"]
     out: dict = {"lambda_start": rows[0]["lambda"] if rows else None}
     out["lambda_end"] = rows[-1]["lambda"] if rows else None
     for name, (key, reference) in quantities.items():

@@ -1,13 +1,16 @@
 """What a converged step of the coiling measured: its history row.
 
-Energies, the forces at the two ends of the tape, the end's slide, the coil's geometry and the
-hub torque, measured twice: from the energy balance of the step and as the root's reaction.
+Energies, the forces at the two ends of the tape, the end's slide, the coil's geometry, the
+hub torque, measured twice: from the energy balance of the step and as the root's reaction, and
+the outer turn's coiling tension read across its sections (:mod:`tapecoil.measures.payout`).
 """
 
 from __future__ import annotations
 
 from tapecoil.core.stepping import StepRecord
 from tapecoil.measures.deployment import lift_off
+from tapecoil.measures.payout import OUTER_TURN_COLUMNS, outer_turn_tension
+from tapecoil.measures.section_forces import SectionForces
 
 
 class CoilingRows:
@@ -20,6 +23,7 @@ class CoilingRows:
     def __init__(self, model):
         self.m = model
         self.last_potential = None
+        self.sections = SectionForces(model.model, model.tape.contact.nodes, model.comm)
 
     def row(self, phase: str, load: float, step: StepRecord) -> dict:
         """The row of the state ``step`` reached at ``load`` of ``phase`` ("flatten" or "coil"),
@@ -29,6 +33,7 @@ class CoilingRows:
         e = m.tape.energies()
         slide = m.end_slide()
         geometry = m.tape.coil_geometry(angle)
+        lam = lift_off(m.tape)["lambda"]
         internal = m.internal_force()  # one assembly for the end forces and the hub torque
         forces = m.edge_forces(internal)
         tension, root_tension = forces["tension"], forces["root_tension"]
@@ -43,6 +48,11 @@ class CoilingRows:
         if phase == "coil" and self.last_potential is not None and step.step != 0 and not step.relaxed:
             torque = (potential - self.last_potential) / step.step
         self.last_potential = potential
+        outer = (
+            outer_turn_tension(m.tape, self.sections, tension, lam, angle)
+            if phase == "coil"
+            else dict.fromkeys(OUTER_TURN_COLUMNS, "")
+        )
         return {
             "phase": phase,
             "load": load,
@@ -67,5 +77,6 @@ class CoilingRows:
             "coiled_length": geometry["coiled_length"],
             "outer_radius": geometry["outer_radius"],
             # the deployed fraction by the deployment's definition (measures.deployment.lift_off)
-            "lambda": lift_off(m.tape)["lambda"],
+            "lambda": lam,
+            **outer,
         }

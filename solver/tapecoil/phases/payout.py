@@ -5,16 +5,17 @@ back (:meth:`CoilingRun.coil` from the stowed angle down) while the pull at the 
 (``payout.tension``), until the hub's angle is the one whose mid-surface spiral holds
 (1 - payout.lambda_end) L. Without friction the path is the coiling's, reversed.
 
-Each step's row is the coiling's (:mod:`tapecoil.phases.coiling_rows`) plus the axial force
-read across two sections of the tape (:mod:`tapecoil.measures.section_forces`), independently of
-the contact that loads them:
+Each step's row is the coiling's (:mod:`tapecoil.phases.coiling_rows`), which reads the axial
+force across the tape's sections (:mod:`tapecoil.measures.section_forces`) independently of the
+contact that loads them:
 
-- ``coiling_tension_outer``: T - N on the outermost turn, ``OUTER_STATION`` radians of winding
-  behind the tangent point, where the section is flat on the coil. By the configurational force
-  balance (physics brief Sec. 5) it is Eq. 2.6 at that turn's mid-surface radius, which is Eq.
-  4.5 with the coil's growing radius r(lambda): the tension the driven hub must hold for the
-  coil to stay wound as it pays out.
-- ``coiling_tension`` (the coiling's): T - N at the root, Eq. 2.6 at the first turn's radius.
+- ``coiling_tension_outer``: T - N on the outermost turn, 1 to 3 rad of winding behind the
+  tangent point (:data:`~tapecoil.measures.payout.OUTER_STATION`), where the section lies on
+  the coil. By the configurational force balance (physics brief Sec. 5) the plate law puts it
+  at Eq. 2.6 at that turn's mid-surface radius, which is Eq. 4.5 with the coil's growing
+  radius: the tension the driven hub must hold for the coil to stay wound as it pays out.
+- ``coiling_tension`` (the coiling's): T - N at the root, where the clamp holds the whole width
+  flat (docs/deployment.md compares the two readings).
 
 The hub torque (from the root's reactions) is compared with steady coiling, rho (T + b w(rho))
 with rho the outermost turn's mid-surface radius (:func:`tapecoil.measures.payout.payout_measures`).
@@ -30,8 +31,7 @@ from mpi4py import MPI
 from tapecoil import theory
 from tapecoil.config import Config, ConfigError
 from tapecoil.core.dofs import global_size
-from tapecoil.measures.payout import outer_turn_tension, payout_measures
-from tapecoil.measures.section_forces import SectionForces
+from tapecoil.measures.payout import payout_measures
 from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
 from tapecoil.phases.coiling_run import CoilingRun
 from tapecoil.phases.runner import LOG, Phase, run_phase
@@ -73,7 +73,6 @@ class PayoutPhase(Phase):
         if restart is not None:
             self.run.restore(restart)
         self.history = self.run.result.history
-        self.sections = SectionForces(model.model, model.tape.contact.nodes, model.comm)
 
     def position(self) -> float:
         return self.model.root.angle
@@ -89,7 +88,6 @@ class PayoutPhase(Phase):
 
     def _on_step(self, row: dict) -> None:
         row["phase"] = "payout"
-        row.update(outer_turn_tension(self.model.tape, self.sections(), row, self.model.root.angle))
         if self.on_row is not None:
             self.on_row(row)
 

@@ -117,7 +117,10 @@ def coiling_forces(directory: Path) -> Path | None:
     ax[0].plot(angle, h["coiling_tension"], label="coiling tension T - N (axial force N into the root)")
     eq26 = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, r_hub)
     ax[0].axhline(eq26, color="k", ls="--", lw=1, label=f"Eq. 2.6, r_c = r_hub: {eq26:.3f} N")
-    if "coiled_length" in h:
+    if "coiling_tension_outer" in h:  # read across the outer turn's sections
+        ax[0].plot(angle, h["coiling_tension_outer"], label="coiling tension T - N on the outer turn")
+        ax[0].plot(angle, h["eq_4_5"], "k:", label="Eq. 4.5, the coil's mid-surface radius rho(lambda)")
+    elif "coiled_length" in h:
         growing = theory.coiling_tension_growing(
             1.0 - h["coiled_length"] / tp.L, tp.D, tp.alpha, tp.R, r_hub, tp.h, tp.L
         )

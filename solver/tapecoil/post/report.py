@@ -22,9 +22,9 @@ from tapecoil.post import plots
 CAPTIONS = {
     "coiling_energies": "Stored energy against hub angle, with the plate estimate w(r) b for the "
     "length actually coiled (physics.md Sec. 3), and its parts.",
-    "coiling_forces": "The pull held at the free end and the coiling tension T - N against Eq. 2.6 "
-    "on the bare hub and Eq. 4.5 at the coil's growing radius; the hub torque from the energy "
-    "balance against steady coiling.",
+    "coiling_forces": "The pull held at the free end and the coiling tension T - N, at the root "
+    "against Eq. 2.6 on the bare hub and on the outer turn against Eq. 4.5 at the coil's growing "
+    "radius; the hub torque from the energy balance against steady coiling.",
     "coil_radius": "Outer coil radius against r_hub + h theta / 2 pi, and the radius of each turn "
     "against the spiral r_hub + h/2 + n h.",
     "coil_profiles": "The stowed coil: curvatures and surface stresses along the coiled length and "
