@@ -74,24 +74,16 @@ def build_parser() -> argparse.ArgumentParser:
     _common_run_options(p)
     p.set_defaults(func=cmd_coil)
 
-    p = sub.add_parser("deploy", help="deploy from a stowed checkpoint (implicit dynamics)")
-    p.add_argument("stowed", help="stowed checkpoint directory (a coiling run's stowed/)")
-    p.add_argument("config", nargs="?", help="TOML configuration (default: the one beside the checkpoint)")
-    p.add_argument("--out", help="results directory (default: <output.directory>/deploy)")
-    p.add_argument("--resume", action="store_true", help="continue from the results directory's deployed/")
-    _common_run_options(p)
-    p.set_defaults(func=cmd_deploy)
-
-    p = sub.add_parser(
-        "payout",
-        help="pay the tape out of a stowed checkpoint with a driven hub, the pull held (quasi-static)",
+    _from_stowed_command(
+        sub, "deploy", "deploy from a stowed checkpoint (implicit dynamics)", "deployed", cmd_deploy
     )
-    p.add_argument("stowed", help="stowed checkpoint directory (a coiling run's stowed/)")
-    p.add_argument("config", nargs="?", help="TOML configuration (default: the one beside the checkpoint)")
-    p.add_argument("--out", help="results directory (default: <output.directory>/payout)")
-    p.add_argument("--resume", action="store_true", help="continue from the results directory's paid_out/")
-    _common_run_options(p)
-    p.set_defaults(func=cmd_payout)
+    _from_stowed_command(
+        sub,
+        "payout",
+        "pay the tape out of a stowed checkpoint with a driven hub, the pull held (quasi-static)",
+        "paid_out",
+        cmd_payout,
+    )
 
     p = sub.add_parser("run", help="the whole pipeline: coil, stow, deploy")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
@@ -130,6 +122,19 @@ def build_parser() -> argparse.ArgumentParser:
 def _common_run_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print the JSON summary (summary.json)")
     p.add_argument("--no-report", action="store_true", help="skip the pictures and report.html")
+
+
+def _from_stowed_command(sub, name: str, help: str, checkpoint: str, func) -> None:
+    """A command that starts from a stowed checkpoint and resumes from its own ``checkpoint``/."""
+    p = sub.add_parser(name, help=help)
+    p.add_argument("stowed", help="stowed checkpoint directory (a coiling run's stowed/)")
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the one beside the checkpoint)")
+    p.add_argument("--out", help=f"results directory (default: <output.directory>/{name})")
+    p.add_argument(
+        "--resume", action="store_true", help=f"continue from the results directory's {checkpoint}/"
+    )
+    _common_run_options(p)
+    p.set_defaults(func=func)
 
 
 def _known_options(parser: argparse.ArgumentParser) -> set[str]:

@@ -65,13 +65,6 @@ def run(
                     config, directory, comm, resume=resume_coil, progress=progress, stop=stop
                 )
             if "deployment" in phases and (model is None or out["coiling"]["completed"]):
-                resume_deploy = None
-                if (
-                    resume
-                    and is_checkpoint(own_deployed)
-                    and read_meta(own_deployed).get("phase") == "deployment"
-                ):
-                    resume_deploy = own_deployed
                 out["deployment"], _ = run_deployment(
                     config,
                     directory,
@@ -80,17 +73,9 @@ def run(
                     tape=None if model is None else model.tape,
                     progress=progress,
                     stop=stop,
-                    resume=resume_deploy,
+                    resume=_own_checkpoint(own_deployed, "deployment") if resume else None,
                 )
             if "payout" in phases and (model is None or out["coiling"]["completed"]):
-                own_paid_out = directory / "paid_out"
-                resume_payout = None
-                if (
-                    resume
-                    and is_checkpoint(own_paid_out)
-                    and read_meta(own_paid_out).get("phase") == "payout"
-                ):
-                    resume_payout = own_paid_out
                 out["payout"], _ = run_payout(
                     config,
                     directory,
@@ -99,7 +84,7 @@ def run(
                     model=model,
                     progress=progress,
                     stop=stop,
-                    resume=resume_payout,
+                    resume=_own_checkpoint(directory / "paid_out", "payout") if resume else None,
                 )
         from tapecoil.measures.separation import separation_measure
 
@@ -114,6 +99,11 @@ def run(
     finally:
         results.stop_log(handler)
     return summary
+
+
+def _own_checkpoint(path: Path, phase: str) -> Path | None:
+    """``path`` if it holds a checkpoint of ``phase`` to resume from, else None."""
+    return path if is_checkpoint(path) and read_meta(path).get("phase") == phase else None
 
 
 def make_report(directory: str | Path, comm=MPI.COMM_WORLD) -> Path | None:

@@ -147,15 +147,58 @@ class CoilingRun(SteppedRun):
         return self.result
 
 
-class CoilingPhase(Phase):
+class HubTurningPhase(Phase):
+    """A phase that turns the hub of a :class:`CoilingModel` (the coiling, a driven hub's payout):
+    it is where the hub is, its checkpoint is the coiling model's, and its run figures are the
+    same."""
+
+    unit = "rad"
+
+    def __init__(self, model: CoilingModel):
+        super().__init__()
+        self.model = model
+
+    def position(self) -> float:
+        return self.model.root.angle
+
+    def checkpoint_meta(self) -> dict:
+        return {"hub_angle": self.model.root.angle, "tension": float(self.model.tension.value)}
+
+    def write_checkpoint(self, path: Path, meta: dict) -> None:
+        write_checkpoint(self.model, path, meta)
+
+    def run_figures(self, steps: int, t_start: float) -> dict:
+        """The summary's "run": ranks, DOFs, mesh, ``steps`` (the phase's own count), Newton
+        iterations, penetration, wall times and the cost of an iteration."""
+        model, history = self.model, self.history
+        res, comm = model.strip.resolution, model.comm
+        timing = model.solver.timing_per_iteration()
+        return {
+            "ranks": comm.size,
+            "dofs": global_size(model.model.W),
+            "mesh": f"{res.along} x {res.across}",
+            "predictor": model.predictor,
+            "penalty": model.penalty,
+            "steps": steps,
+            "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
+            # this process's, including the attempts that failed and were cut back
+            "newton_iterations_total": int(model.solver.timings["iterations"]),
+            "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
+            "wall_time": history[-1]["wall_time"] if history else 0.0,
+            "process_wall_time": time.perf_counter() - t_start,
+            "assembly_per_iteration": timing["assembly"],
+            "linear_solve_per_iteration": timing["linear_solve"],
+        }
+
+
+class CoilingPhase(HubTurningPhase):
     """Coiling as a phase of :func:`~tapecoil.phases.runner.run_phase`: flatten, then turn the hub
     to ``coiling.hub_angle``; the coil's measures at the end (:mod:`tapecoil.measures.coiling`)."""
 
-    name, checkpoint_name, unit = "coiling", "stowed", "rad"
+    name, checkpoint_name = "coiling", "stowed"
 
     def __init__(self, model: CoilingModel, restart: dict | None = None, stop=None):
-        super().__init__()
-        self.model = model
+        super().__init__(model)
         self.target = model.config.coiling.hub_angle
         self.run = CoilingRun(model, stop=stop)
         self.run.on_step = self._on_step
@@ -168,17 +211,8 @@ class CoilingPhase(Phase):
             self.run.restore(restart)
             self.history = self.run.result.history
 
-    def position(self) -> float:
-        return self.model.root.angle
-
     def restart_state(self) -> dict:
         return {**self.run.restart_state(), "ploy": self.ploy}
-
-    def checkpoint_meta(self) -> dict:
-        return {"hub_angle": self.model.root.angle, "tension": float(self.model.tension.value)}
-
-    def write_checkpoint(self, path: Path, meta: dict) -> None:
-        write_checkpoint(self.model, path, meta)
 
     def _on_step(self, row: dict) -> None:
         if row["phase"] == "coil" and abs(row["hub_angle"] - 2 * math.pi) < 1e-9:
@@ -215,38 +249,20 @@ class CoilingPhase(Phase):
 
     def summary(self, interrupted, t_start: float) -> dict:
         """The coiling phase's summary: measures against the theory and the run's figures."""
-        model, history = self.model, self.history
-        res, comm = model.strip.resolution, model.comm
-        measures = coil_measures(model.tape, self._cells)
+        measures = coil_measures(self.model.tape, self._cells)
         if self.ploy:
             measures["ploy_length_one_turn"] = self.ploy
-        torque = hub_torque_measure(history)
+        torque = hub_torque_measure(self.history)
         if torque is not None:
             measures["hub_torque"] = torque
-        timing = model.solver.timing_per_iteration()
         return {
             "completed": self.completed,
             "message": self.message,
             "interrupted": None if interrupted is None else interrupted.name,
-            "hub_angle": model.root.angle,
+            "hub_angle": self.model.root.angle,
             "target_hub_angle": self.target,
             "measures": measures,
-            "run": {
-                "ranks": comm.size,
-                "dofs": global_size(model.model.W),
-                "mesh": f"{res.along} x {res.across}",
-                "predictor": model.predictor,
-                "penalty": model.penalty,
-                "steps": len([r for r in history if r["phase"] == "coil"]),
-                "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
-                # this process's, including the attempts that failed and were cut back
-                "newton_iterations_total": int(model.solver.timings["iterations"]),
-                "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
-                "wall_time": history[-1]["wall_time"] if history else 0.0,
-                "process_wall_time": time.perf_counter() - t_start,
-                "assembly_per_iteration": timing["assembly"],
-                "linear_solve_per_iteration": timing["linear_solve"],
-            },
+            "run": self.run_figures(len([r for r in self.history if r["phase"] == "coil"]), t_start),
         }
 
 

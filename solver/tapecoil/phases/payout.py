@@ -32,9 +32,9 @@ from tapecoil import theory
 from tapecoil.config import Config, ConfigError
 from tapecoil.core.dofs import global_size
 from tapecoil.measures.payout import payout_measures
-from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
-from tapecoil.phases.coiling_run import CoilingRun
-from tapecoil.phases.runner import LOG, Phase, run_phase
+from tapecoil.phases.coiling import CoilingModel, read_checkpoint
+from tapecoil.phases.coiling_run import CoilingRun, HubTurningPhase
+from tapecoil.phases.runner import LOG, run_phase
 
 
 def payout_angle(config: Config) -> float:
@@ -54,15 +54,14 @@ def check_payout(config: Config, stowed_angle: float) -> None:
         )
 
 
-class PayoutPhase(Phase):
+class PayoutPhase(HubTurningPhase):
     """The driven hub's payout as a phase of :func:`~tapecoil.phases.runner.run_phase`."""
 
-    name, checkpoint_name, unit = "payout", "paid_out", "rad"
+    name, checkpoint_name = "payout", "paid_out"
 
     def __init__(self, model: CoilingModel, stop=None, restart: dict | None = None):
-        super().__init__()
+        super().__init__(model)
         config = model.config
-        self.model = model
         # a restart goes on from the stopped payout's state towards the same end
         self.start = model.root.angle if restart is None else restart["start_hub_angle"]
         check_payout(config, self.start)
@@ -74,17 +73,8 @@ class PayoutPhase(Phase):
             self.run.restore(restart)
         self.history = self.run.result.history
 
-    def position(self) -> float:
-        return self.model.root.angle
-
     def restart_state(self) -> dict:
         return {**self.run.restart_state(), "start_hub_angle": self.start}
-
-    def checkpoint_meta(self) -> dict:
-        return {"hub_angle": self.model.root.angle, "tension": float(self.model.tension.value)}
-
-    def write_checkpoint(self, path: Path, meta: dict) -> None:
-        write_checkpoint(self.model, path, meta)
 
     def _on_step(self, row: dict) -> None:
         row["phase"] = "payout"
@@ -104,31 +94,16 @@ class PayoutPhase(Phase):
         return line + f", lambda {self.history[-1]['lambda']:.3f}" if self.history else line
 
     def summary(self, interrupted, t_start: float) -> dict:
-        model, history = self.model, self.history
-        res, comm = model.strip.resolution, model.comm
-        timing = model.solver.timing_per_iteration()
         return {
             "completed": self.completed,
             "message": self.message,
             "interrupted": None if interrupted is None else interrupted.name,
-            "hub_angle": model.root.angle,
+            "hub_angle": self.model.root.angle,
             "start_hub_angle": self.start,
             "target_hub_angle": self.target,
             "tension": self.pull,
-            "measures": payout_measures(model.config, history),
-            "run": {
-                "ranks": comm.size,
-                "dofs": global_size(model.model.W),
-                "mesh": f"{res.along} x {res.across}",
-                "predictor": model.predictor,
-                "steps": len(history),
-                "newton_iterations": int(sum(r["newton_iterations"] for r in history)),
-                "max_penetration": max((r["max_penetration"] for r in history), default=0.0),
-                "wall_time": history[-1]["wall_time"] if history else 0.0,
-                "process_wall_time": time.perf_counter() - t_start,
-                "assembly_per_iteration": timing["assembly"],
-                "linear_solve_per_iteration": timing["linear_solve"],
-            },
+            "measures": payout_measures(self.model.config, self.history),
+            "run": self.run_figures(len(self.history), t_start),
         }
 
 

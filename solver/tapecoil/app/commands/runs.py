@@ -126,45 +126,36 @@ def _stowed_config(args: argparse.Namespace):
     return load_config(args.config or (beside if beside.is_file() else None))
 
 
-def cmd_deploy(args: argparse.Namespace) -> int:
+def _from_stowed(args: argparse.Namespace, phase: str, checkpoint: str) -> int:
+    """``phase`` from the stowed checkpoint of the command line (the command of ``args``),
+    resuming with --resume from the results directory's own ``checkpoint``/."""
     from tapecoil.app.pipeline import run
 
     config = _stowed_config(args)
-    directory = args.out or f"{config.output.directory}/deploy"
+    directory = args.out or f"{config.output.directory}/{args.command}"
     if args.resume:
-        _resume_path("", directory, "deployed")
+        _resume_path("", directory, checkpoint)
     summary = run(
         config,
         directory,
-        phases=("deployment",),
+        phases=(phase,),
         resume=args.resume,
         stowed=args.stowed,
         progress=not args.json,
         report=False if args.no_report else None,
-        command="deploy",
+        command=args.command,
     )
     return _finish(args, summary, directory)
+
+
+def cmd_deploy(args: argparse.Namespace) -> int:
+    """Deploy a stowed checkpoint (implicit dynamics)."""
+    return _from_stowed(args, "deployment", "deployed")
 
 
 def cmd_payout(args: argparse.Namespace) -> int:
     """Pay the tape out of a stowed checkpoint with a driven hub (quasi-static)."""
-    from tapecoil.app.pipeline import run
-
-    config = _stowed_config(args)
-    directory = args.out or f"{config.output.directory}/payout"
-    if args.resume:
-        _resume_path("", directory, "paid_out")
-    summary = run(
-        config,
-        directory,
-        phases=("payout",),
-        resume=args.resume,
-        stowed=args.stowed,
-        progress=not args.json,
-        report=False if args.no_report else None,
-        command="payout",
-    )
-    return _finish(args, summary, directory)
+    return _from_stowed(args, "payout", "paid_out")
 
 
 def cmd_run(args: argparse.Namespace) -> int:
