@@ -40,36 +40,51 @@ def closest_points(
 ) -> dict[str, np.ndarray]:
     """The point of each cell closest to each point: ``points`` (n, 3), ``cells_xyz`` (n, 9, 3).
 
-    Gauss-Newton on |x - y(r)|^2 over the reference square, kept inside it (a point beyond an
-    edge of the cell projects onto that edge). The neglected term of Newton is the distance
-    times the surface's curvature, so for points within a few thicknesses of a shell whose
-    radius of curvature is many thicknesses the iteration contracts by that ratio each step.
+    Gauss-Newton on |x - y(r)|^2 over the reference square: a coordinate on an edge that the
+    descent would carry out of the square is held there and the other is solved for alone, so
+    that a point beyond an edge projects onto the edge's closest point (a clipped full step
+    would stop beside it). The neglected term of Newton is the distance times the surface's
+    curvature, so for points within a few thicknesses of a shell whose radius of curvature is
+    many thicknesses the iteration contracts by that ratio each step.
 
-    Returns ``ref`` (n, 2), the closest point ``y`` (n, 3), the shape functions ``N`` (n, 9)
-    there, the unit ``normal`` (n, 3) of the cell's orientation (dy/dr_1 x dy/dr_2), the
-    ``distance`` (n,) and the unit ``direction`` (n, 3) from y to the point. ``start``: reference
-    coordinates to start from (a previous projection), else the cell centres.
+    Returns ``ref`` (n, 2), ``held`` (n, 2) the coordinates held on an edge, the closest point
+    ``y`` (n, 3), the shape functions ``N`` (n, 9) there, the unit ``normal`` (n, 3) of the
+    cell's orientation (dy/dr_1 x dy/dr_2), the ``distance`` (n,) and the unit ``direction``
+    (n, 3) from y to the point. ``start``: reference coordinates to start from (a previous
+    projection), else the cell centres.
     """
     n = points.shape[0]
     ref = np.full((n, 2), 0.5) if start is None else start.copy()
+    identity = np.eye(2)[None]
     for _ in range(iterations):
         N, dN = q2_basis(ref)
         y = np.matmul(N[:, None, :], cells_xyz)[:, 0]
         t = np.matmul(dN.transpose(0, 2, 1), cells_xyz)  # (n, 2, 3): tangents
-        r = points - y
+        rhs = np.matmul(t, (points - y)[:, :, None])[..., 0]  # minus the gradient of |x - y|^2 / 2
+        held = ((ref <= 0.0) & (rhs < 0.0)) | ((ref >= 1.0) & (rhs > 0.0))
         G = np.matmul(t, t.transpose(0, 2, 1))
-        rhs = np.matmul(t, r[:, :, None])
-        step = np.linalg.solve(G, rhs)[..., 0]
+        G = np.where(held[:, :, None] | held[:, None, :], identity, G)
+        step = np.linalg.solve(G, np.where(held, 0.0, rhs)[:, :, None])[..., 0]
         ref = np.clip(ref + step, 0.0, 1.0)
     N, dN = q2_basis(ref)
     y = np.matmul(N[:, None, :], cells_xyz)[:, 0]
     t = np.matmul(dN.transpose(0, 2, 1), cells_xyz)
+    r = points - y
+    rhs = np.einsum("nji,ni->nj", t, r)
+    held = ((ref <= 0.0) & (rhs < 0.0)) | ((ref >= 1.0) & (rhs > 0.0))
     normal = np.cross(t[:, 0], t[:, 1])
     normal /= np.linalg.norm(normal, axis=1)[:, None]
-    r = points - y
     distance = np.linalg.norm(r, axis=1)
     direction = r / np.maximum(distance, 1e-300)[:, None]
-    return {"ref": ref, "y": y, "N": N, "normal": normal, "distance": distance, "direction": direction}
+    return {
+        "ref": ref,
+        "held": held,
+        "y": y,
+        "N": N,
+        "normal": normal,
+        "distance": distance,
+        "direction": direction,
+    }
 
 
 def box_distance(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:

@@ -16,18 +16,21 @@ either), counted on the node's side so that a node pushed through its partner ha
 pushed back. Beyond a free edge of the partner its face counts as extended by h (turns of one
 width lie edge over edge). The penalty energy is w_A k/2 <-g>^2 (w_A the node's share of the
 reference area, k the stiffness per unit area, <.> the bracket smoothed over a width delta as
-in the hub contact: delta softplus(-g / delta)). Its force acts on A and, through the shape
-functions N_b(y), on the nodes of the partner cell: equal and opposite, since sum_b N_b = 1.
+in the hub contact: delta softplus(-g / delta)). Its force, dE/dg along B = side n_s (x)
+(1, -N_1, ..., -N_9), acts on A and, through the shape functions N_b(y), on the nodes of the
+partner cell: equal and opposite, since sum_b N_b = 1.
 Both faces' nodes are contact points (two-pass), so the pressure between two layers is the sum
 of both passes. A node keeps its partner cell on a side while its closest point stays inside
 it: of two nearly equally close cells (a node over the edge between them) the closer by
 round-off would change from one Newton iteration to the next, and Newton would cycle.
 
-Newton's matrix is the main part of the exact one, w_A k (<-g>'^2 + <-g> <-g>'') B B^T with
-B = e (x) (1, -N_1, ..., -N_9), e = side n_s: at the closest point the variation of y along the
-surface drops out of dg, and the remaining terms (the turning of n_s, times the force) are the
-penetration over the element length, small against the main part when the penetration is a
-fraction of h.
+Newton's operator is the force's exact derivative (:mod:`tapecoil.contact.linearisation`): on
+each pair's 30 dofs (the closest point sliding along the partner, the turning of n_s and of the
+shape functions with it), assembled with the shell's matrix; and through the nodal normals, on
+the nodes of the cells around the partner cell, applied in the Krylov solve that the factorised
+assembled matrix preconditions (:meth:`~tapecoil.contact.term.SelfContactTerm.apply_coupling`).
+The force along the smoothed normal is not the gradient of an energy: the operator is not
+symmetric.
 
 Parallel: the mid-surface is small (nodes and cells of a 2D mesh), so every rank gathers all
 node positions at each evaluation (:class:`GatheredSurface`) and searches for its own nodes'
@@ -43,11 +46,13 @@ from dataclasses import dataclass
 
 import dolfinx
 import numpy as np
+import scipy.sparse
 import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from tapecoil.contact.projection import Q2_TENSOR, CandidateSearch, closest_points, q2_basis
+from tapecoil.contact.linearisation import NodalNormals, gap_derivatives
+from tapecoil.contact.projection import CandidateSearch, closest_points, q2_basis
 
 
 def smoothed_bracket(gap: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -66,8 +71,12 @@ class ContactPairs:
     """The contact pairs of one rank at one state: contact node, partner cell and the penalty.
 
     ``dofs`` (P, 30): global u-dofs of the node and of the partner cell's nodes; ``B`` (P, 30):
-    dg/dq on them; ``force`` (P,): dE/dg; ``stiffness`` (P,): d2E/dg2; ``energy``: this rank's
-    penalty energy [J].
+    the force's direction on them (the force is ``force`` B, ``force`` (P,) = dE/dg);
+    ``matrix`` (P, 30, 30): the force's derivative on them at fixed nodal normals;
+    ``N`` (P, 9) the shape functions at the closest points;
+    ``normal_sensitivity`` (P, 30, 3): the force's derivative with respect to m = N_b n_b;
+    ``normal_data``: the state's nodal normals for :meth:`SelfContact.coupling`; ``energy``:
+    this rank's penalty energy [J].
     """
 
     node: np.ndarray
@@ -77,7 +86,10 @@ class ContactPairs:
     dofs: np.ndarray
     B: np.ndarray
     force: np.ndarray
-    stiffness: np.ndarray
+    matrix: np.ndarray
+    N: np.ndarray
+    normal_sensitivity: np.ndarray
+    normal_data: dict
     energy: float
 
 
@@ -154,14 +166,19 @@ class GatheredSurface:
         out[self._order] = np.concatenate(self.comm.allgather(values))
         return out
 
-    def positions(self, q: np.ndarray) -> np.ndarray:
-        """Mid-surface positions (N, 3) of every node at the W-dof array ``q`` (collective)."""
+    def gather_u(self, q: np.ndarray) -> np.ndarray:
+        """The u components (N, 3) of every node of the W-dof array ``q`` (its owned part at
+        least), on every rank (collective)."""
         u = q[self.nodes.u_dofs[: self.n_owned]]
         out = np.empty((self.n_nodes, 3))
         received = np.empty(3 * self.n_nodes)
         self.comm.Allgatherv(np.ascontiguousarray(u.ravel()), [received, 3 * self._counts])
         out[self._order] = received.reshape(-1, 3)
-        return out + self.reference
+        return out
+
+    def positions(self, q: np.ndarray) -> np.ndarray:
+        """Mid-surface positions (N, 3) of every node at the W-dof array ``q`` (collective)."""
+        return self.gather_u(q) + self.reference
 
 
 def nearest_on_each_side(node, cell, side, distance, inside, memory=None) -> np.ndarray:
@@ -203,20 +220,17 @@ class SelfContact:
         self.buffer, self.exclusion, self.side_hint = buffer, exclusion, side_hint
         self.reach = thickness + self.cutoff
         self.free_edges = free_edges(self.cells)
-        # Q2 gradients at the cell's own nodes (reference coordinates): the nodal normals
-        self._node_gradients = q2_basis(Q2_TENSOR / 2.0)[1]
-        self.timings = {"gather": 0.0, "search": 0.0, "projection": 0.0, "assembly": 0.0}
+        self.normal_field = NodalNormals(self.cells)
+        self.timings = {
+            "gather": 0.0,
+            "search": 0.0,
+            "projection": 0.0,
+            "normal_derivatives": 0.0,
+            "assembly": 0.0,
+            "coupling": 0.0,
+        }
         self._reference_version = 0
         self.accept(model.q.x.array)
-
-    def nodal_normals(self, x: np.ndarray) -> np.ndarray:
-        """Unit normals (N, 3) at the nodes: the mean of the normals of the cells around each."""
-        t = np.einsum("nak,cai->cnki", self._node_gradients, x[self.cells])  # (Nc, 9, 2, 3)
-        cell_normals = np.cross(t[:, :, 0], t[:, :, 1])
-        cell_normals /= np.linalg.norm(cell_normals, axis=2)[:, :, None]
-        total = np.zeros_like(x)
-        np.add.at(total, self.cells.ravel(), cell_normals.reshape(-1, 3))
-        return total / np.maximum(np.linalg.norm(total, axis=1), 1e-300)[:, None]
 
     def new_search(self) -> CandidateSearch:
         return CandidateSearch(self.cells, self.material, self.exclusion, self.reach, self.buffer)
@@ -294,40 +308,63 @@ class SelfContact:
         # width lie edge over edge, and their edges must not pass each other); farther beside
         # it the node is not over the partner
         r = x[node] - found["y"]
-        smooth = np.matmul(found["N"][:, None, :], self.nodal_normals(x)[self.cells[cell]])[:, 0]
+        nodal, normal_data = self.normal_field.normals(x)
+        smooth = np.matmul(found["N"][:, None, :], nodal[self.cells[cell]])[:, 0]
         smooth /= np.linalg.norm(smooth, axis=1)[:, None]
         normal_distance = np.einsum("pi,pi->p", r, smooth)
         beside = np.linalg.norm(r - normal_distance[:, None] * smooth, axis=1)
         over = ~on_free_edge(found["ref"], self.free_edges[cell]) | (beside <= self.h)
         gap = side * normal_distance - self.h
-        direction = side[:, None] * smooth
-        distance = found["distance"]
         keep = over & (gap < self.cutoff)
-        node, cell, gap, side, distance = node[keep], cell[keep], gap[keep], side[keep], distance[keep]
-        direction, N, ref = direction[keep], found["N"][keep], found["ref"][keep]
+        node, cell, gap, side = node[keep], cell[keep], gap[keep], side[keep]
+        ref, held, distance = found["ref"][keep], found["held"][keep], found["distance"][keep]
         first = nearest_on_each_side(node, cell, side, distance, inside_cell(ref), memory)
-        node, cell, gap, N, e = node[first], cell[first], gap[first], N[first], direction[first]
+        node, cell, gap, side, ref, held = (v[first] for v in (node, cell, gap, side, ref, held))
         t2 = time.perf_counter()
         self.timings["search"] += t1 - t0
         self.timings["projection"] += t2 - t1
 
+        partner = self.cells[cell]
+        d = gap_derivatives(x[node], x[partner], nodal[partner], ref, held, side)
         u_dofs = self.u_dofs if dofs is None else dofs
-        coefficients = np.concatenate([np.ones((len(node), 1)), -N], axis=1)
-        B = (coefficients[:, :, None] * e[:, None, :]).reshape(len(node), 30)
-        pair_dofs = np.concatenate([u_dofs[node], u_dofs[self.cells[cell]].reshape(-1, 27)], axis=1)
+        pair_dofs = np.concatenate([u_dofs[node], u_dofs[partner].reshape(-1, 27)], axis=1)
         p, dp, d2p = smoothed_bracket(gap, self.delta)
         kw = self.penalty * self.weights[node]
+        force, stiffness = kw * p * dp, kw * (dp**2 + p * d2p)
+        # the force f B differentiated at fixed nodal normals, and with respect to m = N_b n_b
+        matrix = stiffness[:, None, None] * d["B"][:, :, None] * d["dg"][:, None, :]
+        matrix += force[:, None, None] * d["dB"]
+        sensitivity = stiffness[:, None, None] * d["B"][:, :, None] * d["dg_dm"][:, None, :]
+        sensitivity += force[:, None, None] * d["dB_dm"]
         return ContactPairs(
             node=node,
             cell=cell,
             gap=gap,
-            direction=e,
+            direction=side[:, None] * smooth[keep][first],
             dofs=pair_dofs,
-            B=B,
-            force=kw * p * dp,
-            stiffness=kw * (dp**2 + p * d2p),
+            B=d["B"],
+            force=force,
+            matrix=matrix,
+            N=q2_basis(ref)[0],
+            normal_sensitivity=sensitivity,
+            normal_data=normal_data,
             energy=float(np.sum(0.5 * kw * p**2)),
         )
+
+    def normal_derivatives(self, pairs: ContactPairs) -> np.ndarray:
+        """dm/dX (P, K, 3, 3) of m = N_b n_b at each pair's closest point, with respect to the
+        nodes of its partner cell's patch (:class:`~tapecoil.contact.linearisation.NodalNormals`:
+        K nodes, -1 padded)."""
+        t0 = time.perf_counter()
+        R = self.normal_field.derivatives(pairs.normal_data)  # (Nc, 9, K, 3, 3)
+        P, n_cells = len(pairs.node), R.shape[0]
+        weights = scipy.sparse.csr_matrix(
+            (pairs.N.ravel(), (np.repeat(np.arange(P), 9), (pairs.cell[:, None] * 9 + np.arange(9)).ravel())),
+            shape=(P, n_cells * 9),
+        )
+        out = (weights @ R.reshape(n_cells * 9, -1)).reshape(P, *R.shape[2:])
+        self.timings["normal_derivatives"] += time.perf_counter() - t0
+        return out
 
     def energy(self, pairs: ContactPairs) -> float:
         """The penalty energy of the whole surface [J] from every rank's ``pairs`` (collective)."""

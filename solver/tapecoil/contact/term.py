@@ -45,6 +45,16 @@ class PairsAtState:
         return self._pairs
 
 
+# Newton's linear systems with the self-contact. The exact Jacobian is the assembled matrix
+# (the shell, the hub and each pair's force on its own 30 dofs) plus the pairs' dependence on
+# the nodal normals, on each partner cell's patch of up to 49 nodes: assembled, that part would
+# be 30 x 147 entries a pair and widen the factorisation. It is applied instead, exactly, in a
+# GMRES preconditioned by the factorised assembled matrix. The force along the partner's
+# smoothed normal is not the gradient of an energy, so neither matrix is symmetric: LU, not
+# MUMPS' LDL^T
+SOLVER_OPTIONS = {"pc_type": "lu", "ksp_type": "gmres", "ksp_rtol": 1e-8, "ksp_max_it": 100}
+
+
 class SelfContactTerm:
     """The self-contact's force and matrix in a :class:`~tapecoil.core.newton.SNESSolver`.
 
@@ -68,6 +78,7 @@ class SelfContactTerm:
         self._pattern: set[int] = set()
         self._memory = np.full(2 * contact.n_nodes, -1, dtype=np.int64)
         self._memory_converged, self._converged_version = self._memory.copy(), -1
+        self._coupling = None
         self.pattern_extensions = 0
 
     def _pairs(self, name: str, q: np.ndarray, search: CandidateSearch) -> ContactPairs:
@@ -108,8 +119,13 @@ class SelfContactTerm:
         self.contact.timings["assembly"] += time.perf_counter() - t0
 
     def add_jacobian(self, A: PETSc.Mat) -> bool:
-        """Add the contact matrix to ``A`` (collective); True if A's pattern had to be widened."""
+        """Add the contact matrix to ``A`` (collective); True if A's pattern had to be widened.
+
+        A takes each pair's force differentiated on its own 30 dofs; its derivative through the
+        nodal normals, on the dofs of the partner cell's patch, is kept for :meth:`apply_coupling`.
+        """
         pairs = self.current()
+        self._coupling = (pairs, self.contact.normal_derivatives(pairs))
         t0 = time.perf_counter()
         keys = pairs.node * len(self.contact.cells) + pairs.cell
         new = np.array([k not in self._pattern for k in keys.tolist()], dtype=bool)
@@ -118,12 +134,30 @@ class SelfContactTerm:
         if widen:
             self._widen(A, pairs.dofs[new])
             self._pattern.update(keys[new].tolist())
-        blocks = (self.weight * pairs.stiffness)[:, None, None] * pairs.B[:, :, None] * pairs.B[:, None, :]
+        blocks = self.weight * pairs.matrix
         add = PETSc.InsertMode.ADD
         for dofs, block in zip(pairs.dofs, blocks, strict=True):
             A.setValues(dofs, dofs, block, addv=add)
         self.contact.timings["assembly"] += time.perf_counter() - t0
         return widen
+
+    def apply_coupling(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        """y += K x, K the part of the Jacobian at the last :meth:`add_jacobian` that goes
+        through the nodal normals (collective). Constrained dofs take no part."""
+        t0 = time.perf_counter()
+        pairs, dm = self._coupling
+        values = self.contact.surface.gather_u(x.getArray(readonly=True))
+        values[self.dofs < 0] = 0.0
+        patch = self.contact.normal_field.patch[pairs.cell]
+        v = np.where(patch[:, :, None] >= 0, values[patch], 0.0)
+        change = np.einsum("pkjl,pkl->pj", dm, v)  # of m = N_b n_b
+        out = (self.weight * np.einsum("paj,pj->pa", pairs.normal_sensitivity, change)).ravel()
+        rows = pairs.dofs.ravel()
+        free = rows >= 0
+        y.setValues(rows[free], out[free], addv=PETSc.InsertMode.ADD)
+        y.assemblyBegin()
+        y.assemblyEnd()
+        self.contact.timings["coupling"] += time.perf_counter() - t0
 
     def _widen(self, A: PETSc.Mat, dofs: np.ndarray) -> None:
         """Add the couplings of the pairs ``dofs`` (P, 30) to A's nonzero pattern (collective).

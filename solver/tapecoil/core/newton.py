@@ -78,8 +78,12 @@ class SNESSolver:
         # assembled terms beyond the forms (contact between distant parts of the mesh): objects
         # with add_residual(b) and add_jacobian(A), called with the state in place, after the
         # forms and before the Dirichlet rows are set; add_jacobian returns True when it has
-        # widened A's nonzero pattern; begin() is called before every solve
+        # widened A's nonzero pattern; begin() is called before every solve. A term with
+        # apply_coupling(x, y) (y += K x) applies that part K of its Jacobian instead of
+        # assembling it: Newton's operator is then A + K (:class:`JacobianOperator`), which
+        # the factorised A preconditions in a Krylov solve
         self.terms: list = []
+        self._operator = None
         # cumulative wall times [s]: residual and Jacobian assembly, and whole solves
         self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
 
@@ -124,13 +128,17 @@ class SNESSolver:
         dolfinx.fem.petsc.set_bc(b, self.bcs, self.q.x.petsc_vec, -1.0)
         self.timings["residual"] += time.perf_counter() - t0
 
-    def _jacobian(self, _snes, x, A, _P) -> None:
+    def _jacobian(self, _snes, x, J, P) -> None:
+        # J is P but for an operator P preconditions (a term's applied part, -snes_mf_operator)
         t0 = time.perf_counter()
         self._update_state(x)
+        A = P
         A.zeroEntries()
         compat.assemble_matrix(A, self.J_form, self.bcs)
         widened = [term.add_jacobian(A) for term in self.terms]
         A.assemble()
+        if J.handle != P.handle:
+            J.assemble()
         self.convergence.update_floor(A, x)
         if any(widened):
             # a widened pattern replaces A's storage (PETSc's header merge), which the
@@ -138,8 +146,16 @@ class SNESSolver:
             self.snes.getKSP().getPC().reset()
         self.timings["jacobian"] += time.perf_counter() - t0
 
+    def _use_operator(self) -> None:
+        if self._operator is None and any(hasattr(term, "apply_coupling") for term in self.terms):
+            J = PETSc.Mat().createPython(self.A.getSizes(), JacobianOperator(self), comm=self.A.getComm())
+            J.setUp()
+            self.snes.setJacobian(self._jacobian, J, self.A)
+            self._operator = J
+
     def solve(self) -> SolveResult:
         """Solve from the current state ``q``; on failure ``q`` holds the last iterate."""
+        self._use_operator()
         self.norms.clear()
         for term in self.terms:
             term.begin()
@@ -203,5 +219,20 @@ class SNESSolver:
         )
 
     def destroy(self) -> None:
-        for obj in (self.snes, self.A, self.b, self.x):
-            obj.destroy()
+        for obj in (self.snes, self.A, self.b, self.x, self._operator):
+            if obj is not None:
+                obj.destroy()
+
+
+class JacobianOperator:
+    """Newton's operator A + sum of the terms' applied parts, as a PETSc python matrix's context."""
+
+    def __init__(self, solver: SNESSolver):
+        self.solver = solver
+
+    def mult(self, _mat, x, y) -> None:
+        self.solver.A.mult(x, y)
+        for term in self.solver.terms:
+            apply = getattr(term, "apply_coupling", None)
+            if apply is not None:
+                apply(x, y)

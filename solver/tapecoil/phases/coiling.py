@@ -104,7 +104,7 @@ class CoilingModel:
             bcs,
             config.solver,
             prefix="coil_",
-            defaults={"pc_type": "cholesky"},
+            defaults={"pc_type": "cholesky", **tape.solver_options()},
             options=config.coiling.petsc_options,
             state_scale=model.rounding_scale(),
         )

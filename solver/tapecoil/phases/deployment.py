@@ -95,7 +95,7 @@ class DeploymentModel:
             self.bcs,
             cfg.solver,
             prefix="deploy_",
-            defaults=options,
+            defaults={**options, **self.tape.solver_options()},
             options=cfg.deployment.petsc_options,
             state_scale=model.rounding_scale(),
         )

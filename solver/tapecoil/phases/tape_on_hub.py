@@ -18,6 +18,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
@@ -151,6 +152,10 @@ class TapeOnHub:
         """After a converged step: the turns' real contact reads its sides from this state."""
         if self.turns is not None:
             self.turns.accept()
+
+    def solver_options(self) -> dict:
+        """PETSc options a solver with this tape's contact terms needs (names without prefix)."""
+        return {} if self.turns is None else dict(SOLVER_OPTIONS)
 
     def contact_terms(self, q, bcs, weight: float = 1.0, previous=None) -> list:
         """The solver terms of the turns' real contact (:meth:`TurnContact.term`), if any."""
