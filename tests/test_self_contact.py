@@ -189,6 +189,29 @@ def test_contact_jacobian_is_the_derivative_of_its_force(folded):
         obj.destroy()
 
 
+def test_contact_coupling_transpose_is_the_adjoint(folded):
+    """<K^T w, v> = <w, K v> for the applied part K, in random directions (what a trust region's
+    steepest descent uses)."""
+    from tapecoil.contact.term import SelfContactTerm
+
+    model, _, contact, _, _, _ = folded
+    term = SelfContactTerm(contact, model.q, [])  # its own matrix pattern
+    A = contact_matrix(model, term)
+    rng = np.random.default_rng(5)
+    v, w = model.q.x.petsc_vec.duplicate(), model.q.x.petsc_vec.duplicate()
+    v.setArray(rng.standard_normal(v.getLocalSize()))
+    w.setArray(rng.standard_normal(w.getLocalSize()))
+    Kv, Ktw = v.duplicate(), v.duplicate()
+    Kv.set(0.0)
+    Ktw.set(0.0)
+    term.apply_coupling(v, Kv)
+    term.apply_coupling(w, Ktw, transpose=True)
+    assert Kv.norm() > 0
+    assert w.dot(Kv) == pytest.approx(Ktw.dot(v), rel=1e-12)
+    for obj in (A, v, w, Kv, Ktw):
+        obj.destroy()
+
+
 def test_nodal_normals_derivatives_against_central_differences():
     """dn_b/dX over each cell's patch, on a wavy 4 x 3 grid of Q2 cells, against differences."""
     from tapecoil.contact.linearisation import NodalNormals

@@ -141,18 +141,25 @@ class SelfContactTerm:
         self.contact.timings["assembly"] += time.perf_counter() - t0
         return widen
 
-    def apply_coupling(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
-        """y += K x, K the part of the Jacobian at the last :meth:`add_jacobian` that goes
-        through the nodal normals (collective). Constrained dofs take no part."""
+    def apply_coupling(self, x: PETSc.Vec, y: PETSc.Vec, transpose: bool = False) -> None:
+        """y += K x (or K^T x), K the part of the Jacobian at the last :meth:`add_jacobian` that
+        goes through the nodal normals (collective). Constrained dofs take no part."""
         t0 = time.perf_counter()
         pairs, dm = self._coupling
         values = self.contact.surface.gather_u(x.getArray(readonly=True))
         values[self.dofs < 0] = 0.0
         patch = self.contact.normal_field.patch[pairs.cell]
-        v = np.where(patch[:, :, None] >= 0, values[patch], 0.0)
-        change = np.einsum("pkjl,pkl->pj", dm, v)  # of m = N_b n_b
-        out = (self.weight * np.einsum("paj,pj->pa", pairs.normal_sensitivity, change)).ravel()
-        rows = pairs.dofs.ravel()
+        if not transpose:
+            v = np.where(patch[:, :, None] >= 0, values[patch], 0.0)
+            change = np.einsum("pkjl,pkl->pj", dm, v)  # of m = N_b n_b
+            out = (self.weight * np.einsum("paj,pj->pa", pairs.normal_sensitivity, change)).ravel()
+            rows = pairs.dofs.ravel()
+        else:
+            cells = self.contact.cells[pairs.cell]
+            on_rows = np.concatenate([values[pairs.node], values[cells].reshape(-1, 27)], axis=1)
+            change = self.weight * np.einsum("paj,pa->pj", pairs.normal_sensitivity, on_rows)
+            out = np.einsum("pkjl,pj->pkl", dm, change).ravel()
+            rows = np.where(patch[:, :, None] >= 0, self.dofs[patch], -1).ravel()
         free = rows >= 0
         y.setValues(rows[free], out[free], addv=PETSc.InsertMode.ADD)
         y.assemblyBegin()

@@ -236,3 +236,10 @@ class JacobianOperator:
             apply = getattr(term, "apply_coupling", None)
             if apply is not None:
                 apply(x, y)
+
+    def multTranspose(self, _mat, x, y) -> None:
+        """(A + K)^T x: for a trust region's steepest descent (``snes_type newtontr``)."""
+        self.solver.A.multTranspose(x, y)
+        for term in self.solver.terms:
+            if hasattr(term, "apply_coupling"):
+                term.apply_coupling(x, y, transpose=True)
