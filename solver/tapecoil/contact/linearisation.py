@@ -71,9 +71,9 @@ def gap_derivatives(
 
     ``x`` (P, 3) the nodes, ``X`` (P, 9, 3) the partner cells' nodes, ``nodal`` (P, 9, 3) their
     unit normals, ``ref`` (P, 2) the closest points, ``held`` (P, 2) the coordinates held on an
-    edge, ``side`` (P,). Returns ``gap`` (P,) g + h, ``B`` (P, 30), ``dg`` (P, 30) the gap's
-    gradient, ``dB`` (P, 30, 30) dB_a/dq_b, and ``dg_dm`` (P, 3), ``dB_dm`` (P, 30, 3): the
-    derivatives with respect to m = N_b n_b.
+    edge, ``side`` (P,). Returns ``B`` (P, 30), ``dg`` (P, 30) the gap's gradient, ``dB``
+    (P, 30, 30) dB_a/dq_b, and ``dg_dm`` (P, 3), ``dB_dm`` (P, 30, 3): the derivatives with
+    respect to m = N_b n_b.
     """
     P = x.shape[0]
     N, dN = q2_basis(ref)
@@ -113,7 +113,6 @@ def gap_derivatives(
     dg_dm = side[:, None] * np.einsum("pi,pij->pj", r, turn)
     dB_dm = side[:, None, None, None] * shape[:, :, None, None] * turn[:, None, :, :]
     return {
-        "gap": side * np.einsum("pi,pi->p", r, n),
         "B": B,
         "dg": dg,
         "dB": dB,

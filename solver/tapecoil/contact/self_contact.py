@@ -52,7 +52,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from tapecoil.contact.linearisation import NodalNormals, gap_derivatives
-from tapecoil.contact.projection import CandidateSearch, closest_points, q2_basis
+from tapecoil.contact.projection import CandidateSearch, closest_points
 
 
 def smoothed_bracket(gap: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -75,7 +75,7 @@ class ContactPairs:
     ``matrix`` (P, 30, 30): the force's derivative on them at fixed nodal normals;
     ``N`` (P, 9) the shape functions at the closest points;
     ``normal_sensitivity`` (P, 30, 3): the force's derivative with respect to m = N_b n_b;
-    ``normal_data``: the state's nodal normals for :meth:`SelfContact.coupling`; ``energy``:
+    ``normal_data``: the state's nodal normals for :meth:`SelfContact.normal_derivatives`; ``energy``:
     this rank's penalty energy [J].
     """
 
@@ -320,6 +320,7 @@ class SelfContact:
         ref, held, distance = found["ref"][keep], found["held"][keep], found["distance"][keep]
         first = nearest_on_each_side(node, cell, side, distance, inside_cell(ref), memory)
         node, cell, gap, side, ref, held = (v[first] for v in (node, cell, gap, side, ref, held))
+        N = found["N"][keep][first]
         t2 = time.perf_counter()
         self.timings["search"] += t1 - t0
         self.timings["projection"] += t2 - t1
@@ -345,7 +346,7 @@ class SelfContact:
             B=d["B"],
             force=force,
             matrix=matrix,
-            N=q2_basis(ref)[0],
+            N=N,
             normal_sensitivity=sensitivity,
             normal_data=normal_data,
             energy=float(np.sum(0.5 * kw * p**2)),
@@ -355,9 +356,12 @@ class SelfContact:
         """dm/dX (P, K, 3, 3) of m = N_b n_b at each pair's closest point, with respect to the
         nodes of its partner cell's patch (:class:`~tapecoil.contact.linearisation.NodalNormals`:
         K nodes, -1 padded)."""
+        P = len(pairs.node)
+        if P == 0:  # no pairs on this rank (early in coiling): nothing to differentiate
+            return np.zeros((0, self.normal_field.patch.shape[1], 3, 3))
         t0 = time.perf_counter()
         R = self.normal_field.derivatives(pairs.normal_data)  # (Nc, 9, K, 3, 3)
-        P, n_cells = len(pairs.node), R.shape[0]
+        n_cells = R.shape[0]
         weights = scipy.sparse.csr_matrix(
             (pairs.N.ravel(), (np.repeat(np.arange(P), 9), (pairs.cell[:, None] * 9 + np.arange(9)).ravel())),
             shape=(P, n_cells * 9),

@@ -230,16 +230,16 @@ class JacobianOperator:
     def __init__(self, solver: SNESSolver):
         self.solver = solver
 
+    def _applied(self) -> list:
+        return [term for term in self.solver.terms if hasattr(term, "apply_coupling")]
+
     def mult(self, _mat, x, y) -> None:
         self.solver.A.mult(x, y)
-        for term in self.solver.terms:
-            apply = getattr(term, "apply_coupling", None)
-            if apply is not None:
-                apply(x, y)
+        for term in self._applied():
+            term.apply_coupling(x, y)
 
     def multTranspose(self, _mat, x, y) -> None:
         """(A + K)^T x: for a trust region's steepest descent (``snes_type newtontr``)."""
         self.solver.A.multTranspose(x, y)
-        for term in self.solver.terms:
-            if hasattr(term, "apply_coupling"):
-                term.apply_coupling(x, y, transpose=True)
+        for term in self._applied():
+            term.apply_coupling(x, y, transpose=True)
