@@ -95,7 +95,7 @@ if rank0:
 # %%
 if rank0:
     path = np.array(result.info["path"])
-    M_star = theory.fold_moment(tape.D, tape.nu, tape.alpha)
+    M_star = theory.fold_moment(config.wall.bending, tape.alpha)
     snap = result.info["snap_angle"]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.0))
     for ax, zoom in zip(axes, (False, True), strict=True):

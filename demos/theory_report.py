@@ -35,6 +35,7 @@ from tapecoil.config import load_config
 
 config = load_config(sys.argv[1] if len(sys.argv) > 1 else None)
 tape, r_hub = config.tape, config.hub.radius
+bending = config.wall.bending
 out = Path(config.output.directory) / "theory"
 out.mkdir(parents=True, exist_ok=True)
 
@@ -54,7 +55,9 @@ tapecoil_cli(["theory", *sys.argv[1:2]])
 
 # %%
 def rate(r):
-    return th.seffen_rate(tape.mu, r, tape.R, tape.alpha, tape.rho_l, tape.L)
+    return th.seffen_rate(
+        th.coil_energy_at_R(bending, tape.R, config.coiling.sense), r, tape.R, tape.alpha, tape.rho_l, tape.L
+    )
 
 
 def rate_growing(lam):
@@ -94,16 +97,16 @@ ratio_t = np.linspace(th.UNIQUENESS_LIMIT, 5.25, 100)
 fig, ax = plt.subplots(figsize=(6.4, 4.2))
 ax.plot(
     ratio_b,
-    [th.coiling_tension_bending(tape.D, tape.alpha, tape.R, x * tape.R) for x in ratio_b],
+    [th.coiling_tension_bending(bending, tape.alpha, tape.R, x * tape.R) for x in ratio_b],
     label="Eq. 2.6 (bending-dominated)",
 )
 ax.plot(
     ratio_t,
-    [th.coiling_tension_tension_dominated(tape.D, tape.alpha, tape.R, x * tape.R) for x in ratio_t],
+    [th.coiling_tension_tension_dominated(bending, tape.alpha, tape.R, x * tape.R) for x in ratio_t],
     label="Eq. 2.9 (tension-dominated)",
 )
 ax.axvspan(1.0, th.UNIQUENESS_LIMIT, color="0.92", label="loss of uniqueness")
-T_bench = th.coiling_tension_bending(tape.D, tape.alpha, tape.R, r_hub)
+T_bench = th.coiling_tension_bending(bending, tape.alpha, tape.R, r_hub)
 ax.plot([r_hub / tape.R], [T_bench], "ko", label=f"benchmark hub: {T_bench:.3f} N")
 ax.set(
     xlabel="r_c / R [-]",

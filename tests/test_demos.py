@@ -25,7 +25,7 @@ EXPECTED = {
     ),
     "tape_fold.py": (
         ["tape_fold-smoke/fold.bp", "tape_fold-smoke/moment_rotation.png", "tape_fold-smoke/summary.json"],
-        ["moment plateau / (1 + nu) D alpha", "written:"],
+        ["moment plateau / alpha (sqrt(D11 D22) + D12)", "written:"],
     ),
     "benchmark.py": (
         [

@@ -261,18 +261,18 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
         from tapecoil import theory
 
         config = sweep.config({})
-        tp = config.tape
+        tp, bending = config.tape, config.wall.bending
         ratio = np.array([r["ratio"] for r in rows])
         grid = np.linspace(0.9 * ratio.min(), 1.1 * ratio.max(), 200)
         ax.plot(
             grid,
-            [theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, x * tp.R) for x in grid],
+            [theory.coiling_tension_bending(bending, tp.alpha, tp.R, x * tp.R) for x in grid],
             "--",
             label="Eq. 2.6 (bending-dominated)",
         )
         ax.plot(
             grid,
-            [theory.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, x * tp.R) for x in grid],
+            [theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, x * tp.R) for x in grid],
             ":",
             label="Eq. 2.9 (tension-dominated)",
         )

@@ -16,6 +16,10 @@ else:  # pragma: no cover - Python 3.10 (conda environments)
     import tomli as tomllib
 
 
+ISOTROPIC_KEYS = ("E", "nu")
+"""The [tape] keys of an isotropic wall, which a laminate replaces."""
+
+
 def config_from_dict(data: dict[str, Any]) -> Config:
     """Build and validate a :class:`Config` from a nested mapping (parsed TOML)."""
     sections = {f.name: f for f in dataclasses.fields(Config)}
@@ -33,6 +37,14 @@ def config_from_dict(data: dict[str, Any]) -> Config:
                 raise ConfigError(f"unknown key {name}.{key} (known in [{name}]: {', '.join(sorted(known))})")
             table[key] = coerce(f"{name}.{key}", hints[key], value)
         kwargs[name] = cls(**table)
+    laminate = kwargs.get("laminate")
+    if laminate is not None and laminate.kind != "isotropic":
+        for key in ISOTROPIC_KEYS:
+            if key in data.get("tape", {}):
+                raise ConfigError(
+                    f"tape.{key} does not act with a laminate (laminate.kind = {laminate.kind!r}): the "
+                    f"wall's stiffness comes from [laminate]; leave tape.{key} out"
+                )
     config = Config(**kwargs)
     config.check()
     return config
@@ -72,6 +84,8 @@ def to_toml(config: Config) -> str:
         section = getattr(config, sec.name)
         lines.append(f"[{sec.name}]")
         for f in dataclasses.fields(section):
+            if sec.name == "tape" and f.name in ISOTROPIC_KEYS and config.laminate.kind != "isotropic":
+                continue
             v = getattr(section, f.name)
             if isinstance(v, dict):
                 inner = ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items())

@@ -36,6 +36,7 @@ def ploy_measure(tape: TapeOnHub, coiled=None, xi1=None, xi2=None, k_trans=None)
     the section to recover (near the end of the coiling run). Cell values may be passed in.
     """
     tp = tape.config.tape
+    beta = tape.config.wall.bending.beta
     if coiled is None:
         coiled = tape.coil_geometry(tape.root.angle)["coiled_length"]
         _, cells = cell_midpoint_values(tape.model.mesh, [tape.model.curvatures()[1]])
@@ -56,8 +57,8 @@ def ploy_measure(tape: TapeOnHub, coiled=None, xi1=None, xi2=None, k_trans=None)
     return {
         "computed": ploy,
         "hub_angle": tape.root.angle,
-        "reference_arc_width": theory.ploy_length(tp.b, tp.R, tp.h),
-        "reference_projected_width": theory.ploy_length(2 * tp.R * math.sin(tp.alpha / 2), tp.R, tp.h),
+        "reference_arc_width": theory.ploy_length(tp.b, tp.R, tp.h, beta),
+        "reference_projected_width": theory.ploy_length(2 * tp.R * math.sin(tp.alpha / 2), tp.R, tp.h, beta),
         "free_length": tp.L - coiled,
         "quantity": "centre line, transverse curvature from 0.1/R to 0.9/R",
         "profile": {"xi1": s_line.tolist(), "kappa_trans_R": kt_line.tolist()},
@@ -96,7 +97,7 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     coiled_energy = sum(global_scalar(f, m.mesh.comm) for f in m.energy_forms(wound))
     wound_angle = theory.rotation_for_coiled_length(coiled, r_hub, h)
     sense = cfg.coiling.sense
-    reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, tp.D, tp.nu, sense)
+    reference_energy = theory.stored_energy(wound_angle, r_hub, h, tp.R, tp.alpha, cfg.wall.bending, sense)
     total = tape.energies()
     plate = "plate estimate w(rho) over the coiled spiral (physics brief Sec. 3)"
     out["stored_energy_coiled"] = Measure(
@@ -121,7 +122,7 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     cells = coiled_cells(tape) if cells is None else cells
     xi1, xi2, psi, k_long, k_trans = (cells[k] for k in ("xi1", "xi2", "psi", "kappa_long", "kappa_trans"))
     sx, sy = np.abs(cells["sigma_x"]), np.abs(cells["sigma_y"])
-    E, nu = tp.E, tp.nu
+    surface = cfg.wall.stiffness_at(h / 2)
     turn = np.floor(psi / (2 * math.pi))
     rho = r_hub + h / 2 + h * turn
     interior = (
@@ -132,7 +133,7 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     )
     if interior.any():
         curvature_ratio = np.abs(k_long[interior]) * rho[interior]
-        sx_ref, sy_ref = np.abs(theory.coil_stresses(rho[interior], tp.R, E, nu, h / 2, sense))
+        sx_ref, sy_ref = np.abs(theory.coil_stresses(rho[interior], tp.R, surface, h / 2, sense))
         sx_ratio, sy_ratio = sx[interior] / sx_ref, sy[interior] / sy_ref
         out["cells_interior"] = int(interior.sum())
         out["curvature_longitudinal"] = Measure(
@@ -169,7 +170,7 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
                 extra={
                     "worst": float(ratio[np.argmax(np.abs(ratio - 1))]),
                     "reference_first_turn_Pa": float(
-                        theory.coil_stresses(r_hub, tp.R, E, nu, h / 2, sense)[axis]
+                        theory.coil_stresses(r_hub, tp.R, surface, h / 2, sense)[axis]
                     ),
                 },
             ).to_dict()
@@ -224,15 +225,17 @@ def coiled_cells(tape: TapeOnHub) -> dict[str, np.ndarray]:
     Columns: xi_1, xi_2 [m], winding angle [rad], longitudinal and transverse curvature [1/m],
     surface bending stresses sigma_x, sigma_y [Pa] (signed; see :func:`coil_measures`).
     """
-    m, tp = tape.model, tape.config.tape
+    m, h = tape.model, tape.config.tape.h
     kx, ky = m.curvatures()
     # surface bending stresses (physics.md Sec. 4) from the curvature changes: the parameter
     # metric is the identity (xi_1 = x, xi_2 = arc length), so k_11 and k_22 are physical. The
     # membrane strain is left out: with reduced integration its point values are not the
-    # converged field (its energy, reported in the history, is small)
+    # converged field (its energy, reported in the history, is small). Q is the stiffness of
+    # the wall's face at z = h/2 (the outer ply of a laminate)
     k = m.bending_strain
-    c = tp.E / (1 - tp.nu**2) * 0.5 * tp.h
-    stresses = [c * (k[0, 0] + tp.nu * k[1, 1]), c * (k[1, 1] + tp.nu * k[0, 0])]
+    Q = 0.5 * h * tape.config.wall.stiffness_at(h / 2)
+    strain = (k[0, 0], k[1, 1], 2 * k[0, 1])
+    stresses = [sum(Q[i, j] * strain[j] for j in range(3)) for i in (0, 1)]
     _, cells = cell_midpoint_values(m.mesh, [tape.contact.psi, kx, ky, *stresses])
     cells = np.vstack(tape.comm.allgather(cells))
     cells = cells[np.lexsort((cells[:, 1], cells[:, 0]))]

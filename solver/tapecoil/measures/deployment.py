@@ -24,7 +24,7 @@ def deployment_reference(config, lam0: float, energy: str = "mu") -> theory.Depl
     """The modified ODE of physics.md Sec. 6 from lambda0: Eq. 2.24 with r(lambda) of Eq. 4.4.
 
     ``energy`` is the strain energy per unit area released by unspooling: "mu" is Seffen's
-    D (1 + nu) / R^2 (physics.md; exact for a coil of radius R), "plate" the plate estimate
+    w(R) = D (1 + nu) / R^2 (physics.md; exact for a coil of radius R), "plate" the plate estimate
     w(r) of physics.md Sec. 3 at the coil radius r(lambda), which the benchmark coil (r about
     13 mm < R = 15.1 mm) actually stores: 79 to 82 J/m^2 against mu = 67.9 J/m^2.
     """
@@ -33,7 +33,8 @@ def deployment_reference(config, lam0: float, energy: str = "mu") -> theory.Depl
         raise ValueError(f"energy must be 'mu' or 'plate', got {energy!r}")
     free = config.deployment.hub == "free"
     sense = config.coiling.sense
-    mu = theory.coil_energy_at_R(tp.D, tp.nu, tp.R, sense)
+    bending = config.wall.bending
+    mu = theory.coil_energy_at_R(bending, tp.R, sense)
 
     def radius(lam):
         return float(theory.coil_radius_during_deployment(lam, r_hub, tp.h, tp.L))
@@ -46,7 +47,7 @@ def deployment_reference(config, lam0: float, energy: str = "mu") -> theory.Depl
 
     def rate(lam):
         r = radius(lam)
-        density = mu if energy == "mu" else float(theory.energy_density(r, tp.R, tp.D, tp.nu, sense))
+        density = mu if energy == "mu" else float(theory.energy_density(r, tp.R, bending, sense))
         k = theory.seffen_rate(density, r, tp.R, tp.alpha, tp.rho_l, tp.L)
         return k * free_hub(lam)[0] if free else k
 
@@ -59,7 +60,7 @@ def deployment_measures(config, history: list[dict]) -> dict:
     ode = deployment_reference(config, lam0)
     tp, r_hub = config.tape, config.hub.radius
     sense = config.coiling.sense
-    mu = theory.coil_energy_at_R(tp.D, tp.nu, tp.R, sense)
+    mu = theory.coil_energy_at_R(config.wall.bending, tp.R, sense)
     k_hub = theory.seffen_rate(mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
     stowed = history[0]["strain_energy"] + history[0]["contact_energy"]
     dissipated = np.array([r["dissipated_energy"] for r in history])
@@ -122,7 +123,9 @@ def deployment_measures(config, history: list[dict]) -> dict:
         "released_energy_per_area": {
             "computed": released / (unspooled * tp.b) if unspooled > 0 else None,
             "mu": mu,
-            "plate_at_coil_radius": float(theory.energy_density(config.hub.radius, tp.R, tp.D, tp.nu, sense)),
+            "plate_at_coil_radius": float(
+                theory.energy_density(config.hub.radius, tp.R, config.wall.bending, sense)
+            ),
         },
         "time_to_end": Measure(
             "time to lambda = 1, modified ODE (mu) [s]",

@@ -44,7 +44,7 @@ LAMBDA_BANDS = tuple(round(0.1 * k, 1) for k in range(1, 10))
 def tension_law(rho, config) -> float | np.ndarray:
     """Eq. 2.6 at the mid-surface radius rho [m] of the configured tape [N]."""
     tp = config.tape
-    return theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, rho)
+    return theory.coiling_tension_bending(config.wall.bending, tp.alpha, tp.R, rho)
 
 
 def eq_4_5(lam, config) -> float | np.ndarray:
@@ -57,7 +57,7 @@ def eq_4_5(lam, config) -> float | np.ndarray:
 def steady_torque(rho: float, pull: float, config) -> float:
     """Steady coiling's hub torque rho (T + b w(rho)) [N m] (the energy balance of a step)."""
     tp = config.tape
-    return rho * (pull + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu, config.coiling.sense))
+    return rho * (pull + tp.b * theory.energy_density(rho, tp.R, config.wall.bending, config.coiling.sense))
 
 
 def _station(angle: float) -> float:

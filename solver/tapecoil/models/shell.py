@@ -25,6 +25,8 @@ Strains (covariant, with phi = phi0 + u, F = grad phi):
 Isotropic plane-stress resultants use the contravariant metric A = a0^-1; the energy per unit
 reference area is h/2 C(e):e + h^3/24 C(k):k + kappa G h / 2 g.A.g with
 C(S) = E/(1-nu^2) ((1-nu) A S A + nu tr(A S) A), kappa = 5/6, integrated with sqrt(det a0).
+A laminated wall takes the strains' components in an orthonormal frame of the surface (the
+first vector along xi_1) and its A, B, D, H matrices (:mod:`~tapecoil.models.materials`).
 
 Locking. A thin shell (here R/h = 151 and elements 40 h long) locks in membrane and shear if
 those terms are integrated exactly with low-order elements. ``technology`` selects:
@@ -46,8 +48,6 @@ node-wise state views) and :mod:`~tapecoil.models.solver_terms` (relaxation, rou
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import ufl
 
 from tapecoil.models import nodes, secant, solver_terms
@@ -58,6 +58,7 @@ from tapecoil.models.director import (
     director_secant,
     reference_frame,
 )
+from tapecoil.models.materials import SHEAR_CORRECTION, LaminateMaterial, ShellMaterial, shell_material
 from tapecoil.models.nodes import Nodes
 from tapecoil.models.quadrature import TECHNOLOGIES, ShellQuadrature
 
@@ -65,54 +66,15 @@ __all__ = [
     "FRAMES",
     "SHEAR_CORRECTION",
     "TECHNOLOGIES",
+    "LaminateMaterial",
     "NaghdiShell",
     "Nodes",
     "ShellMaterial",
     "angles_from_director",
     "director_from_angles",
     "director_secant",
+    "shell_material",
 ]
-
-SHEAR_CORRECTION = 5.0 / 6.0
-
-
-@dataclass(frozen=True)
-class ShellMaterial:
-    """Isotropic linear elastic shell: Young's modulus E [Pa], Poisson ratio nu [-], thickness h [m]."""
-
-    E: float
-    nu: float
-    h: float
-
-    @property
-    def shear_modulus(self) -> float:
-        return self.E / (2 * (1 + self.nu))
-
-    def energy_densities(self, A, e, k, g):
-        """Membrane, bending and shear energy per unit reference area of the covariant strains
-        (e, k, g), with the contravariant metric A (the module docstring's energy)."""
-        E, nu, h = self.E, self.nu, self.h
-        return (
-            0.5 * h * ufl.inner(_plane_stress(e, A, E, nu), e),
-            h**3 / 24 * ufl.inner(_plane_stress(k, A, E, nu), k),
-            0.5 * SHEAR_CORRECTION * self.shear_modulus * h * ufl.dot(g, ufl.dot(A, g)),
-        )
-
-    def work_densities(self, A, strains, variations):
-        """Membrane, bending and shear virtual work per unit reference area of the resultants of
-        the strains (e, k, g) on the strain variations (de, dk, dg)."""
-        (e, k, g), (de, dk, dg) = strains, variations
-        E, nu, h = self.E, self.nu, self.h
-        return (
-            h * ufl.inner(_plane_stress(e, A, E, nu), de),
-            h**3 / 12 * ufl.inner(_plane_stress(k, A, E, nu), dk),
-            SHEAR_CORRECTION * self.shear_modulus * h * ufl.dot(ufl.dot(A, g), dg),
-        )
-
-
-def _plane_stress(S, A, E: float, nu: float):
-    """Contravariant stress-like tensor C(S) of a covariant strain S, isotropic plane stress."""
-    return E / (1 - nu**2) * ((1 - nu) * ufl.dot(ufl.dot(A, S), A) + nu * ufl.tr(ufl.dot(A, S)) * A)
 
 
 class NaghdiShell:

@@ -80,7 +80,10 @@ class CoilingRun(SteppedRun):
     def _continuation(self, set_load, control, predict=None):
         m = self.m
         relax = Relaxation(
-            m.viscosity, m.previous, scale=10 * m.config.tape.D / m.element_length**4, max_iterations=100
+            m.viscosity,
+            m.previous,
+            scale=10 * m.config.wall.bending.D11 / m.element_length**4,
+            max_iterations=100,
         )
         return Continuation(
             m.solver.solve,

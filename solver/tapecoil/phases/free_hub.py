@@ -68,7 +68,9 @@ class FreeHubCoupling:
         self._held = owned_constrained_dofs(W, model.bcs)
         self._n = self._vec.getLocalSize()
         tp = model.config.tape
-        self.moment_scale = tp.D * tp.b / tp.R  # [N m]: the section's bending moment at 1/R
+        self.moment_scale = (
+            model.config.wall.bending.D11 * tp.b / tp.R
+        )  # [N m]: the section's bending moment at 1/R
         self.iterations = 0  # hub Newton steps over the run (on every rank)
 
     def place(self, angle: float) -> None:

@@ -39,7 +39,7 @@ class EndHold:
     """
 
     def __init__(self, tape, integrator, release_time: float):
-        model, tp = tape.model, tape.config.tape
+        model = tape.model
         self.model, self.integrator, self.comm = model, integrator, tape.comm
         self.release_time = release_time
         self.factor = dolfinx.fem.Constant(model.mesh, 1.0)
@@ -49,7 +49,7 @@ class EndHold:
         u, theta = split_state(model.q)
         du, dtheta = split_state(model.dq)
         ell = tape.element_length
-        k_hold = tp.E * tp.h / ell  # per unit edge length: an element's membrane stiffness
+        k_hold = tape.config.wall.A[0, 0] / ell  # per unit edge length: an element's membrane stiffness
         spring = k_hold * (ufl.dot(u - u0, du) + ell**2 * ufl.dot(theta - theta0, dtheta))
         self.form = integrator.at_midpoint(self.factor * spring * model.ds(FREE_END))
         self._compiled = dolfinx.fem.form(self.form)

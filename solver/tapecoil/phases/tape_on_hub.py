@@ -29,7 +29,7 @@ from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact, default_penalty
 from tapecoil.hub.frame import HubFrame
-from tapecoil.models.shell import NaghdiShell, ShellMaterial
+from tapecoil.models.shell import NaghdiShell, shell_material
 from tapecoil.phases import centre_line as centre
 from tapecoil.phases.turn_contact import TurnContact
 
@@ -70,12 +70,14 @@ class TapeOnHub:
             strip = create_strip_mesh(comm, geom, resolution or MeshResolution.from_config(config.mesh, tp.L))
         self.strip = strip
         self.element_length = tp.L / strip.resolution.along
-        self.model = model = NaghdiShell(strip, ShellMaterial(tp.E, tp.nu, tp.h), director_frame="global")
+        self.model = model = NaghdiShell(strip, shell_material(config), director_frame="global")
         self.frame = HubFrame(r_hub, tp.h, config.coiling.sense)
         self.root = HubRoot(model, ROOT, self.frame, CircularArcSection.from_tape(tp))
 
         cc = config.contact
-        self.penalty = cc.penalty or cc.penalty_scale * default_penalty(tp.E, tp.h, self.element_length)
+        self.penalty = cc.penalty or cc.penalty_scale * default_penalty(
+            config.wall.in_plane_modulus, tp.h, self.element_length
+        )
         max_turns = math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1
         # the climb over the root end spread over about two elements (at least 0.3 rad)
         ramp = max(2 * self.element_length / r_hub, 0.3)

@@ -50,8 +50,8 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
     the plain bracket). Eq. 2.9 (tension-dominated coiling) is reported beside it.
     """
     study = study or TensionStudy()
-    tp, r_c = config.tape, config.hub.radius
-    reference = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, r_c)
+    tp, r_c, bending = config.tape, config.hub.radius, config.wall.bending
+    reference = theory.coiling_tension_bending(bending, tp.alpha, tp.R, r_c)
     case = dataclasses.replace(
         config,
         tape=dataclasses.replace(tp, L=study.length),
@@ -78,7 +78,7 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
         "computed": measured,
         "reference": reference,
         "error": abs(measured - reference) / reference,
-        "tension_dominated_eq_2_9": theory.coiling_tension_tension_dominated(tp.D, tp.alpha, tp.R, r_c),
+        "tension_dominated_eq_2_9": theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, r_c),
         "spread": float(values.std()),
         "samples": len(values),
         "max_penetration": max(r["max_penetration"] for r in run.result.history),

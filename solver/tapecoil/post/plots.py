@@ -82,8 +82,7 @@ def coiling_energies(directory: Path) -> Path | None:
             tp.h,
             tp.R,
             tp.alpha,
-            tp.D,
-            tp.nu,
+            config.wall.bending,
             config.coiling.sense,
         )
         for s in h["coiled_length"]
@@ -115,19 +114,19 @@ def coiling_forces(directory: Path) -> Path | None:
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
     ax[0].plot(angle, h["tension"], label="pull held at the free end")
     ax[0].plot(angle, h["coiling_tension"], label="coiling tension T - N (axial force N into the root)")
-    eq26 = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, r_hub)
+    eq26 = theory.coiling_tension_bending(config.wall.bending, tp.alpha, tp.R, r_hub)
     ax[0].axhline(eq26, color="k", ls="--", lw=1, label=f"Eq. 2.6, r_c = r_hub: {eq26:.3f} N")
     if "coiling_tension_outer" in h:  # read across the outer turn's sections
         ax[0].plot(angle, h["coiling_tension_outer"], label="coiling tension T - N on the outer turn")
         ax[0].plot(angle, h["eq_4_5"], "k:", label="Eq. 4.5, the coil's mid-surface radius rho(lambda)")
     elif "coiled_length" in h:
         growing = theory.coiling_tension_growing(
-            1.0 - h["coiled_length"] / tp.L, tp.D, tp.alpha, tp.R, r_hub, tp.h, tp.L
+            1.0 - h["coiled_length"] / tp.L, config.wall.bending, tp.alpha, tp.R, r_hub, tp.h, tp.L
         )
         ax[0].plot(angle, growing["bending"], "k:", label="Eq. 4.5, the coil's radius r(lambda)")
     ax[0].set(xlabel="hub angle [rad]", ylabel="force [N]", title="tension")
     rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
-    steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu, config.coiling.sense))
+    steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, config.wall.bending, config.coiling.sense))
     ax[1].plot(angle, h["hub_torque"] * 1e3, ".-", label="shell (secant of the energy balance)")
     if "hub_torque_reaction" in h:
         ax[1].plot(angle, h["hub_torque_reaction"] * 1e3, "-", label="shell (the root's reactions)")
@@ -189,7 +188,9 @@ def coil_profiles(directory: Path) -> Path | None:
     middle = coiled & np.isclose(data["xi1"], station, rtol=0, atol=1e-9)
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.4))
     s = data["xi1"][sel] * 1e3
-    sx_ref, sy_ref = np.abs(theory.coil_stresses(rho[sel], tp.R, tp.E, tp.nu, h / 2, config.coiling.sense))
+    sx_ref, sy_ref = np.abs(
+        theory.coil_stresses(rho[sel], tp.R, config.wall.stiffness_at(h / 2), h / 2, config.coiling.sense)
+    )
     ax[0].plot(s, np.abs(data["kappa_long"][sel]) * rho[sel], ".", label="|kappa_long| x turn radius")
     ax[0].plot(s, np.abs(data["kappa_trans"][sel]) * tp.R, ".", label="|kappa_trans| x R (flat: 0)")
     ax[0].plot(s, np.abs(data["sigma_x"][sel]) / sx_ref, ".", label="|sigma_x| / plate theory")
@@ -202,7 +203,9 @@ def coil_profiles(directory: Path) -> Path | None:
         ylim=(-0.1, 1.4),
     )
     xi2 = data["xi2"][middle] / tp.b
-    sx_ref, sy_ref = np.abs(theory.coil_stresses(rho[middle], tp.R, tp.E, tp.nu, h / 2, config.coiling.sense))
+    sx_ref, sy_ref = np.abs(
+        theory.coil_stresses(rho[middle], tp.R, config.wall.stiffness_at(h / 2), h / 2, config.coiling.sense)
+    )
     order = np.argsort(xi2)
     ax[1].plot(xi2[order], np.abs(data["sigma_x"][middle])[order] / 1e6, "o-", label="|sigma_x| shell")
     ax[1].plot(xi2[order], sx_ref[order] / 1e6, "--", label="sigma_x plate theory")
@@ -240,7 +243,7 @@ def deployment_lambda(directory: Path) -> Path | None:
     ode = deployment_reference(config, lam0)
     plate = deployment_reference(config, lam0, energy="plate")
     tt = np.linspace(0.0, max(t[-1], ode.t100), 400)
-    mu = theory.coil_energy_at_R(tp.D, tp.nu, tp.R, config.coiling.sense)
+    mu = theory.coil_energy_at_R(config.wall.bending, tp.R, config.coiling.sense)
     k_hub = theory.seffen_rate(mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
     ax.plot(t, h["lambda"], lw=2, label="shell (lift-off point)")
@@ -347,7 +350,7 @@ def payout_forces(directory: Path) -> Path | None:
     ax[0].plot(lam, h["eq_2_6_outer"], "k:", lw=1, label="Eq. 2.6 at the outer turn's measured radius")
     ax[0].plot(lam, h["coiling_tension"], ".", ms=3, label="T - N at the root (shell)")
     rho = config.hub.radius + tp.h / 2
-    root = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, rho)
+    root = theory.coiling_tension_bending(config.wall.bending, tp.alpha, tp.R, rho)
     ax[0].axhline(root, color="k", ls="--", lw=1, label=f"Eq. 2.6 at the first turn: {root:.3f} N")
     ax[0].set(xlabel="deployed fraction lambda", ylabel="force [N]", title="coiling tension, driven hub")
     ax[1].plot(lam, h["hub_torque_reaction"] * 1e3, ".", ms=3, label="shell (the root's reactions)")

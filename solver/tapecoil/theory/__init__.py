@@ -5,6 +5,8 @@ is inconsistent the physics brief's consistent form is used and the docstring sa
 
 numpy and scipy only, so that ``tapecoil theory`` starts without DOLFINx. By job:
 
+- :mod:`~tapecoil.theory.laminate`: the wall's stiffness (A, B, D, H) from E and nu, from plies
+  (classical lamination theory) or given, and the rigidities :class:`Bending` of the formulas;
 - :mod:`~tapecoil.theory.plate`: rigidity, energy densities, section and fold moments, coil
   stresses (and their sign convention), ploy length;
 - :mod:`~tapecoil.theory.coil_geometry`: turn radii, coiled length against hub rotation and coil
@@ -46,6 +48,7 @@ from tapecoil.theory.deployment import (
     solve_deployment_ode,
     stowed_rotary_inertia,
 )
+from tapecoil.theory.laminate import Bending, Wall, plane_stress_stiffness, ply_stiffness
 from tapecoil.theory.plate import (
     SENSES,
     arc_second_moment,
@@ -54,6 +57,7 @@ from tapecoil.theory.plate import (
     energy_density,
     flexural_rigidity,
     fold_moment,
+    fold_radius,
     opposite_sense_energy_density,
     ploy_length,
     sense_sign,
@@ -63,8 +67,10 @@ from tapecoil.theory.table import Prediction, predictions
 __all__ = [
     "SENSES",
     "UNIQUENESS_LIMIT",
+    "Bending",
     "DeploymentSolution",
     "Prediction",
+    "Wall",
     "arc_second_moment",
     "coil_energy_at_R",
     "coil_radius_during_deployment",
@@ -82,11 +88,14 @@ __all__ = [
     "energy_density",
     "flexural_rigidity",
     "fold_moment",
+    "fold_radius",
     "free_hub_factors",
     "max_hub_angle",
     "opposite_sense_energy_density",
     "outer_radius_after_rotation",
+    "plane_stress_stiffness",
     "ploy_length",
+    "ply_stiffness",
     "predictions",
     "radius_from_coiled_length",
     "required_coiling_tension",

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from tapecoil.theory.laminate import Bending
 from tapecoil.theory.plate import sense_sign
 
 
@@ -63,25 +64,26 @@ def max_hub_angle(L: float, r_hub: float, h: float) -> float:
 
 
 def stored_energy(
-    theta: float, r_hub: float, h: float, R: float, alpha: float, D: float, nu: float, sense: str = "opposite"
+    theta: float, r_hub: float, h: float, R: float, alpha: float, bending: Bending, sense: str = "opposite"
 ) -> float:
     """Strain energy [J] of the flattened tape wound by a hub rotation theta (section 3).
 
-    The plate estimate w(rho) of the coiling ``sense`` integrated over the mid-surface spiral
-    rho(phi) = r_hub + h/2 + h phi / (2 pi) with the arc width b = R alpha; the ploy
-    (transition) region is not included. With ds = rho dphi and drho = h dphi / (2 pi) the
-    integral is closed: U = b (2 pi / h) (D/2) [ln rho + rho^2 / (2 R^2) +- 2 nu rho / R] from
-    rho_0 to rho_theta (+ opposite, - equal sense).
+    The plate estimate w(rho) of the coiling ``sense`` (:func:`~tapecoil.theory.plate.energy_density`)
+    integrated over the mid-surface spiral rho(phi) = r_hub + h/2 + h phi / (2 pi) with the arc
+    width b = R alpha; the ploy (transition) region is not included. With ds = rho dphi and
+    drho = h dphi / (2 pi) the integral is closed: U = b (2 pi / h) (1/2) [D11 ln rho +
+    D22 rho^2 / (2 R^2) +- 2 D12 rho / R] from rho_0 to rho_theta (+ opposite, - equal sense).
     """
     b = R * alpha
     r0 = r_hub + h / 2
     r1 = r0 + h * theta / (2 * math.pi)
     s = sense_sign(sense)
+    d = bending
 
     def antiderivative(rho: float) -> float:
-        return math.log(rho) + rho**2 / (2 * R**2) + s * 2 * nu * rho / R
+        return d.D11 * math.log(rho) + d.D22 * rho**2 / (2 * R**2) + s * 2 * d.D12 * rho / R
 
-    return b * (2 * math.pi / h) * 0.5 * D * (antiderivative(r1) - antiderivative(r0))
+    return b * (2 * math.pi / h) * 0.5 * (antiderivative(r1) - antiderivative(r0))
 
 
 def coil_radius_during_deployment(lam: float | np.ndarray, r_hub: float, h: float, L: float):

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from tapecoil.theory.coil_geometry import coil_radius_during_deployment
+from tapecoil.theory.laminate import Bending
 
 UNIQUENESS_LIMIT = 3.424
 """r_c/R above which coiling is tension-dominated; between 1 and this, loss of uniqueness."""
@@ -20,28 +21,34 @@ def coiling_regime(r_c: float, R: float) -> str:
     return "non-unique" if ratio < UNIQUENESS_LIMIT else "tension"
 
 
-def coiling_tension_bending(D: float, alpha: float, R: float, r_c: float) -> float:
-    """Eq. 2.6: T = (D alpha / (2R)) ((R/r_c)^2 - 1) = (D b / 2)(1/r_c^2 - 1/R^2) [N].
+def coiling_tension_bending(bending: Bending, alpha: float, R: float, r_c: float) -> float:
+    """Eq. 2.6: T = (b / 2)(D11/r_c^2 - D22/R^2) [N], b = R alpha; (D b / 2)(1/r_c^2 - 1/R^2) =
+    (D alpha / (2R)) ((R/r_c)^2 - 1) for an isotropic wall (physics brief Sec. 5 and 10).
 
     The configurational-force balance T = M kappa - U of a flattened coil of radius r_c.
     """
-    return D * alpha / (2 * R) * ((R / r_c) ** 2 - 1)
+    return R * alpha / 2 * (bending.D11 / r_c**2 - bending.D22 / R**2)
 
 
-def coiling_tension_tension_dominated(D: float, alpha: float, R: float, r_c: float) -> float:
-    """Eq. 2.9: T = 48 D (1 - cos(alpha/2)) / (alpha^3 R) * (r_c / R) [N]."""
-    return 48 * D * (1 - math.cos(alpha / 2)) / (alpha**3 * R) * (r_c / R)
+def coiling_tension_tension_dominated(bending: Bending, alpha: float, R: float, r_c: float) -> float:
+    """Eq. 2.9: T = 48 D22 (1 - cos(alpha/2)) / (alpha^3 R) * (r_c / R) [N].
+
+    Derived for an isotropic wall (D22 = D); the law flattens the section across its width,
+    so a laminate's transverse rigidity D22 stands for D, a reading not checked against a
+    laminate's wrapping.
+    """
+    return 48 * bending.D22 * (1 - math.cos(alpha / 2)) / (alpha**3 * R) * (r_c / R)
 
 
 def required_coiling_tension(
-    D: float, alpha: float, R: float, r_hub: float, h: float
+    bending: Bending, alpha: float, R: float, r_hub: float, h: float
 ) -> tuple[float, str] | None:
     """The pull [N] a tape needs to wrap onto a hub of radius r_hub, with the law it comes from.
 
     The laws concern the first turn's mid-surface, rho = r_hub + h/2 (physics brief section 10);
     the regime is that of r_hub / R, as in :func:`coiling_regime`:
 
-    - bending-dominated (r_hub/R <= 1): Eq. 2.6, (D b / 2)(1/rho^2 - 1/R^2), not below 0 (a
+    - bending-dominated (r_hub/R <= 1): Eq. 2.6, (b / 2)(D11/rho^2 - D22/R^2), not below 0 (a
       mid-surface looser than R needs no pull by it); 0.374 N for the benchmark tape;
     - tension-dominated (r_hub/R >= 3.424): Eq. 2.9 with rho;
     - loss of uniqueness in between: None. No law gives the tension there: Eq. 2.6 is negative
@@ -51,14 +58,14 @@ def required_coiling_tension(
     rho = r_hub + h / 2
     regime = coiling_regime(r_hub, R)
     if regime == "bending":
-        return max(coiling_tension_bending(D, alpha, R, rho), 0.0), "Eq. 2.6"
+        return max(coiling_tension_bending(bending, alpha, R, rho), 0.0), "Eq. 2.6"
     if regime == "tension":
-        return coiling_tension_tension_dominated(D, alpha, R, rho), "Eq. 2.9"
+        return coiling_tension_tension_dominated(bending, alpha, R, rho), "Eq. 2.9"
     return None
 
 
 def coiling_tension_growing(
-    lam: float | np.ndarray, D: float, alpha: float, R: float, r_hub: float, h: float, L: float
+    lam: float | np.ndarray, bending: Bending, alpha: float, R: float, r_hub: float, h: float, L: float
 ) -> dict[str, float | np.ndarray]:
     """Coiling tension with the coil radius r(lambda) (Eq. 4.5 and the corrected Eq. 4.6) [N].
 
@@ -68,6 +75,6 @@ def coiling_tension_growing(
     r = coil_radius_during_deployment(lam, r_hub, h, L)
     return {
         "radius": r,
-        "bending": coiling_tension_bending(D, alpha, R, r),
-        "tension": coiling_tension_tension_dominated(D, alpha, R, r),
+        "bending": coiling_tension_bending(bending, alpha, R, r),
+        "tension": coiling_tension_tension_dominated(bending, alpha, R, r),
     }

@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from tapecoil.theory.laminate import Bending
+
 
 def flexural_rigidity(E: float, h: float, nu: float) -> float:
     """Plate flexural rigidity D = E h^3 / (12 (1 - nu^2)) [N m]."""
@@ -39,21 +41,23 @@ def opposite_sense_energy_density(D: float, nu: float, R: float) -> float:
     return D * (1 + nu) / R**2
 
 
-def coil_energy_at_R(D: float, nu: float, R: float, sense: str = "opposite") -> float:
-    """w(R) = D (1 +- nu) / R^2 [J/m^2]: Seffen and Pellegrino's mu for either sense (the
-    D (1 -+ nu) of Eq. 2.17)."""
-    return D * (1 + sense_sign(sense) * nu) / R**2
+def coil_energy_at_R(bending: Bending, R: float, sense: str = "opposite") -> float:
+    """w(R) [J/m^2]: Seffen and Pellegrino's mu for either sense, (D11 + D22 +- 2 D12) / (2 R^2);
+    D (1 +- nu) / R^2 for an isotropic wall (the D (1 -+ nu) of Eq. 2.17)."""
+    return float(energy_density(R, R, bending, sense))
 
 
 def energy_density(
-    rho: float | np.ndarray, R: float, D: float, nu: float, sense: str = "opposite"
+    rho: float | np.ndarray, R: float, bending: Bending, sense: str = "opposite"
 ) -> float | np.ndarray:
     """Kirchhoff plate energy per unit area of a flattened section coiled to radius rho [J/m^2].
 
-    w(rho) = (D/2) (1/rho^2 + 1/R^2 +- 2 nu / (rho R)), + for opposite sense (physics brief
-    Sec. 3), - for equal sense (Sec. 10); w(R) = :func:`coil_energy_at_R`.
+    w(rho) = (1/2) (D11/rho^2 + D22/R^2 +- 2 D12 / (rho R)), + for opposite sense, - for equal
+    sense (physics brief Sec. 3 and 10; (D/2)(1/rho^2 + 1/R^2 +- 2 nu/(rho R)) for an isotropic
+    wall); w(R) = :func:`coil_energy_at_R`.
     """
-    return 0.5 * D * (1 / rho**2 + 1 / R**2 + sense_sign(sense) * 2 * nu / (rho * R))
+    d = bending
+    return 0.5 * (d.D11 / rho**2 + d.D22 / R**2 + sense_sign(sense) * 2 * d.D12 / (rho * R))
 
 
 def arc_second_moment(R: float, alpha: float, h: float) -> float:
@@ -68,28 +72,42 @@ def arc_second_moment(R: float, alpha: float, h: float) -> float:
     return R**3 * h * (beta + s * c - 2 * s * s / beta) + R * alpha * h**3 / 12
 
 
-def fold_moment(D: float, nu: float, alpha: float) -> float:
-    """Steady moment of a localised opposite-sense fold, (1 + nu) D alpha [N m].
+def fold_moment(bending: Bending, alpha: float) -> float:
+    """Steady moment of a localised opposite-sense fold, alpha (sqrt(D11 D22) + D12) [N m].
 
-    Wuest (1954); Seffen and Pellegrino (1999). It is the moment plateau after the snap when a
-    tape is bent so that its cross-section flattens.
+    Wuest (1954); Seffen and Pellegrino (1999): (1 + nu) D alpha for an isotropic wall; the
+    orthotropic form minimises w(rho) rho over the fold radius (physics brief Sec. 10). It is
+    the moment plateau after the snap when a tape is bent so that its cross-section flattens.
     """
-    return (1 + nu) * D * alpha
+    d = bending
+    return alpha * (math.sqrt(d.D11 * d.D22) + d.D12)
+
+
+def fold_radius(bending: Bending, R: float) -> float:
+    """Radius of a localised opposite-sense fold, R sqrt(D11 / D22) [m] (R for an isotropic wall)."""
+    return R * math.sqrt(bending.beta)
 
 
 def coil_stresses(
-    rho: float, R: float, E: float, nu: float, z: float, sense: str = "opposite"
+    rho: float | np.ndarray, R: float, Q: np.ndarray, z: float, sense: str = "opposite"
 ) -> tuple[float, float]:
     """Plane-stress bending stresses (sigma_x, sigma_y) [Pa] at z in a coil of radius rho.
 
-    Opposite sense: curvature changes +1/rho (longitudinal) and +1/R (transverse, flattening),
-    eps_x = z/rho, eps_y = z/R. Equal sense: the flattening's is -1/R, eps_y = -z/R, so
-    sigma_x = c (1/rho - nu/R) and sigma_y = -c (1/R - nu/rho) (physics brief Sec. 10).
-    z > 0 on the outer face (see the module docstring); use z = +-h/2.
+    ``Q`` is the plane-stress stiffness at z (:func:`~tapecoil.theory.laminate.plane_stress_stiffness`
+    for an isotropic wall, :meth:`~tapecoil.theory.laminate.Wall.stiffness_at` for a laminate's
+    ply). Opposite sense: curvature changes +1/rho (longitudinal) and +1/R (transverse,
+    flattening), eps_x = z/rho, eps_y = z/R, no twist. Equal sense: the flattening's is -1/R,
+    eps_y = -z/R; for an isotropic wall sigma_x = c (1/rho - nu/R), sigma_y = -c (1/R - nu/rho)
+    (physics brief Sec. 10). The membrane strains are those of a symmetric wall (none). z > 0
+    on the outer face (see the module docstring); use z = +-h/2.
     """
-    c = E / (1 - nu**2) * z
     s = sense_sign(sense)
-    return c * (1 / rho + s * nu / R), s * c * (1 / R + s * nu / rho)
+    ex, ey = z / np.asarray(rho, dtype=float), s * z / R
+    sx = Q[0, 0] * ex + Q[0, 1] * ey
+    sy = Q[1, 0] * ex + Q[1, 1] * ey
+    if np.ndim(sx) == 0:
+        return float(sx), float(sy)
+    return sx, sy
 
 
 def ploy_length(width: float, R: float, h: float, beta: float = 1.0) -> float:

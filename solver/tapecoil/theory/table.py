@@ -27,6 +27,7 @@ from tapecoil.theory.plate import (
     coil_stresses,
     energy_density,
     fold_moment,
+    fold_radius,
     ploy_length,
 )
 
@@ -47,12 +48,14 @@ def predictions(config: Config) -> list[Prediction]:
     tp, r_hub = config.tape, config.hub.radius
     theta = config.coiling.hub_angle
     sense = config.coiling.sense
-    D, mu, b = tp.D, coil_energy_at_R(tp.D, tp.nu, tp.R, sense), tp.b
+    wall = config.wall
+    bending = wall.bending
+    mu, b = coil_energy_at_R(bending, tp.R, sense), tp.b
     r_final = outer_radius_after_rotation(theta, r_hub, tp.h)
     x_coiled = min(coiled_length_from_rotation(theta, r_hub, tp.h), tp.L)
     theta_coiled = rotation_for_coiled_length(x_coiled, r_hub, tp.h)
     rho_first = turn_radius(0, r_hub, tp.h)
-    sx, sy = coil_stresses(r_hub, tp.R, tp.E, tp.nu, tp.h / 2, sense)
+    sx, sy = coil_stresses(r_hub, tp.R, wall.stiffness_at(tp.h / 2), tp.h / 2, sense)
     k_hub = seffen_rate(mu, r_hub, tp.R, tp.alpha, tp.rho_l, tp.L)
     k_coil = seffen_rate(mu, r_final, tp.R, tp.alpha, tp.rho_l, tp.L)
 
@@ -63,15 +66,29 @@ def predictions(config: Config) -> list[Prediction]:
     ode = solve_deployment_ode(k_growing, 0.0)
     regime = coiling_regime(r_hub, tp.R)
     P = Prediction
-    out = [
-        P("D", "flexural rigidity D", D, "N m", "E h^3 / (12 (1 - nu^2))"),
-        P(
-            "mu",
-            f"energy density of an {sense}-sense coil, mu",
-            mu,
-            "J/m^2",
-            f"D (1 {'+' if sense == 'opposite' else '-'} nu) / R^2",
-        ),
+    sign = "+" if sense == "opposite" else "-"
+    if config.laminate.kind == "isotropic":
+        out = [
+            P("D", "flexural rigidity D", bending.D11, "N m", "E h^3 / (12 (1 - nu^2))"),
+            P("mu", f"energy density of an {sense}-sense coil, mu", mu, "J/m^2", f"D (1 {sign} nu) / R^2"),
+        ]
+    else:
+        clt = "D - B A^-1 B, classical lamination theory"
+        out = [
+            P("D11", "bending rigidity along the tape D11", bending.D11, "N m", clt),
+            P("D22", "bending rigidity across the tape D22", bending.D22, "N m", clt),
+            P("D12", "bending coupling D12", bending.D12, "N m", clt),
+            P("D66", "twisting rigidity D66", bending.D66, "N m", clt),
+            P("beta", "orthotropic ratio beta = D11 / D22", bending.beta, "-", "Eq. 3.5"),
+            P(
+                "mu",
+                f"energy density of an {sense}-sense coil, w(R)",
+                mu,
+                "J/m^2",
+                f"(D11 + D22 {sign} 2 D12) / (2 R^2)",
+            ),
+        ]
+    out += [
         P("b", "arc width b", b, "m", "R alpha"),
         P("density", "volume density", tp.density, "kg/m^3", "rho_l / (b h)"),
         P(
@@ -83,10 +100,17 @@ def predictions(config: Config) -> list[Prediction]:
         ),
         P(
             "fold_moment",
-            "fold moment plateau (1 + nu) D alpha",
-            fold_moment(D, tp.nu, tp.alpha),
+            "fold moment plateau alpha (sqrt(D11 D22) + D12)",
+            fold_moment(bending, tp.alpha),
             "N m",
-            "Wuest 1954",
+            "Wuest 1954; physics brief Sec. 10",
+        ),
+        P(
+            "fold_radius",
+            "fold radius R sqrt(D11 / D22)",
+            fold_radius(bending, tp.R),
+            "m",
+            "physics brief Sec. 10",
         ),
         P("coil_radius", f"coil radius after {theta:g} rad", r_final, "m", "r_hub + h theta / (2 pi)"),
         P("turns", "turns on the hub", theta_coiled / (2 * math.pi), "-", "theta / (2 pi)"),
@@ -101,14 +125,14 @@ def predictions(config: Config) -> list[Prediction]:
         P(
             "w_first_turn",
             "energy density of the first turn w(r_hub + h/2)",
-            energy_density(rho_first, tp.R, D, tp.nu, sense),
+            energy_density(rho_first, tp.R, bending, sense),
             "J/m^2",
             "section 3",
         ),
         P(
             "stored_energy",
             "stored strain energy of the coiled length",
-            stored_energy(theta_coiled, r_hub, tp.h, tp.R, tp.alpha, D, tp.nu, sense),
+            stored_energy(theta_coiled, r_hub, tp.h, tp.R, tp.alpha, bending, sense),
             "J",
             "section 3",
         ),
@@ -131,7 +155,7 @@ def predictions(config: Config) -> list[Prediction]:
     }
     if regime in tension_laws:
         law, source = tension_laws[regime]
-        out.append(P("coiling_tension", "coiling tension", law(D, tp.alpha, tp.R, r_hub), "N", source))
+        out.append(P("coiling_tension", "coiling tension", law(bending, tp.alpha, tp.R, r_hub), "N", source))
     out += [
         P("T_deploy_hub", "deployment time, r = r_hub", deployment_time(k_hub), "s", "Eq. 2.23"),
         P("t90_hub", "time to lambda = 0.9, r = r_hub", deployment_time(k_hub, 0.9), "s", "Eq. 2.20"),
@@ -141,14 +165,14 @@ def predictions(config: Config) -> list[Prediction]:
         P(
             "ploy_length_arc",
             "ploy length, arc width",
-            ploy_length(b, tp.R, tp.h),
+            ploy_length(b, tp.R, tp.h, bending.beta),
             "m",
             "Eq. 3.5 (consistent)",
         ),
         P(
             "ploy_length_projected",
             "ploy length, projected width",
-            ploy_length(tp.projected_width, tp.R, tp.h),
+            ploy_length(tp.projected_width, tp.R, tp.h, bending.beta),
             "m",
             "Eq. 3.5 (consistent)",
         ),

@@ -35,11 +35,17 @@ def cmd_theory(args: argparse.Namespace) -> int:
         }
         echo(json.dumps(payload, indent=2))
         return 0
-    tp = config.tape
+    tp, lam = config.tape, config.laminate
     echo(f"tapecoil {__version__}: analytic predictions ({args.config or 'benchmark tape, defaults'})")
+    if lam.kind == "isotropic":
+        wall = f"E = {tp.E / 1e9:g} GPa, nu = {tp.nu:g}"
+    else:
+        d = config.wall.bending
+        layup = "/".join(f"{a:g}" for a in lam.angles) if lam.kind == "plies" else "A, B, D given"
+        wall = f"laminate [{layup}], D11 = {d.D11:.4g} N m, D22 = {d.D22:.4g} N m, D12 = {d.D12:.4g} N m"
     echo(
         f"tape R = {tp.R * 1e3:g} mm, alpha = {math.degrees(tp.alpha):.4g} deg, h = {tp.h * 1e3:g} mm, "
-        f"L = {tp.L:g} m, E = {tp.E / 1e9:g} GPa, nu = {tp.nu:g}, rho_l = {tp.rho_l:g} kg/m; "
+        f"L = {tp.L:g} m, {wall}, rho_l = {tp.rho_l:g} kg/m; "
         f"hub r = {config.hub.radius * 1e3:g} mm; hub rotation {config.coiling.hub_angle:g} rad"
     )
     rows = [(p.label, *_display(p.value, p.unit), p.source) for p in preds]
