@@ -61,7 +61,7 @@ def test_quasi_isotropic_layup_has_an_isotropic_membrane_stiffness():
 
 def test_cross_ply_stiffness_by_hand():
     """[0/90]s and the unsymmetric [0/90] against their integrals through the thickness."""
-    E1, E2, nu12, G12, h = 128e9, 6.5e9, 0.33, 4.5e9, 71e-6
+    E1, E2, nu12, h = 128e9, 6.5e9, 0.33, 71e-6
     d = 1 - nu12**2 * E2 / E1
     Q11, Q22 = E1 / d, E2 / d
     sym = cross_ply([0, 90, 90, 0])

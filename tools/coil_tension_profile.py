@@ -69,7 +69,7 @@ run.on_step = measure
 run.flatten()
 run.coil(args.angle)
 tp = config.tape
-law = theory.coiling_tension_bending(tp.D, tp.alpha, tp.R, config.hub.radius + tp.h / 2)
+law = theory.coiling_tension_bending(config.wall.bending, tp.alpha, tp.R, config.hub.radius + tp.h / 2)
 values = np.array(readings)
 res = model.strip.resolution
 if comm.rank == 0:
