@@ -124,7 +124,7 @@ def test_short_coil_wraps_onto_the_hub(coiled_short, cfg):
 
     tp = cfg.tape
     rho = r_hub + h / 2
-    steady = rho * (cfg.coiling.tension + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
+    steady = rho * (cfg.coiling.tension + tp.b * theory.energy_density(rho, tp.R, cfg.wall.bending))
     late = [r["hub_torque"] for r in coil if r["hub_angle"] > 0.6 and r["hub_torque"] != ""]
     assert late and np.median(late) == pytest.approx(steady, rel=0.10)
 
@@ -153,7 +153,7 @@ def test_turning_the_hub_back_pays_the_tape_out_reversibly(cfg):
     assert back[-1]["end_slide"] - out[-1]["end_slide"] == pytest.approx(rho * 1.0, rel=0.05)
     assert back[-1]["lambda"] > out[-1]["lambda"] + 0.5 * rho / tp.L
     assert back[-1]["coiled_length"] == pytest.approx(rho * 1.0, rel=0.05)  # as when coiling
-    steady = rho * (cfg.coiling.tension + tp.b * theory.energy_density(rho, tp.R, tp.D, tp.nu))
+    steady = rho * (cfg.coiling.tension + tp.b * theory.energy_density(rho, tp.R, cfg.wall.bending))
     torque = [r["hub_torque"] for r in back[1:] if r["hub_torque"] != ""]
     assert torque and np.median(torque) == pytest.approx(steady, rel=0.10)
 
