@@ -336,8 +336,7 @@ def cfrp_short(hub_angle: float, L: float = 0.15):
 def test_cfrp_tape_coils_to_its_orthotropic_plate_state(tmp_path):
     """A turn and a half of the [0/90]s tape: the stored energy of the coiled length within 5 %
     of the orthotropic plate estimate (physics brief Sec. 10), the wound curvature and the face
-    ply's stresses within the isotropic coil's tolerances; the isotropic law would store
-    (D11 + D22 + 2 D12) / (2 D11) of it per unit area with D = D11, not that."""
+    ply's stresses within the isotropic coil's tolerances."""
     from mpi4py import MPI
 
     from tapecoil.phases.coiling_run import run_coiling
@@ -349,8 +348,8 @@ def test_cfrp_tape_coils_to_its_orthotropic_plate_state(tmp_path):
     for key in ("stored_energy_coiled", "curvature_longitudinal", "stress_x", "stress_y"):
         assert m[key]["passed"], (key, m[key]["computed"], m[key]["reference"])
     assert m["stored_energy_coiled"]["error"] < 0.05
-    # the reference is the orthotropic one: an isotropic wall of D = D11, nu = D12 / D11 stores
-    # 2.5 times as much across the width (D22 = D11), far outside the 5 %
+    # the reference is the orthotropic one: an isotropic wall of D = D11, nu = D12 / D11 (so
+    # D22 = D11 across the width) stores 1.7 times as much per unit area, far outside the 5 %
     bending = config.wall.bending
     rho = config.hub.radius + config.tape.h / 2
     iso = th.Bending.isotropic(bending.D11, bending.D12 / bending.D11)
