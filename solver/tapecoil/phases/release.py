@@ -49,7 +49,9 @@ class EndHold:
         u, theta = split_state(model.q)
         du, dtheta = split_state(model.dq)
         ell = tape.element_length
-        k_hold = tape.config.wall.A[0, 0] / ell  # per unit edge length: an element's membrane stiffness
+        k_hold = (
+            tape.config.wall.axial_modulus * tape.config.tape.h / ell
+        )  # per unit edge length: an element's membrane stiffness
         spring = k_hold * (ufl.dot(u - u0, du) + ell**2 * ufl.dot(theta - theta0, dtheta))
         self.form = integrator.at_midpoint(self.factor * spring * model.ds(FREE_END))
         self._compiled = dolfinx.fem.form(self.form)

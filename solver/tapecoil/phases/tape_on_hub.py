@@ -76,7 +76,7 @@ class TapeOnHub:
 
         cc = config.contact
         self.penalty = cc.penalty or cc.penalty_scale * default_penalty(
-            config.wall.in_plane_modulus, tp.h, self.element_length
+            config.wall.axial_modulus, tp.h, self.element_length
         )
         max_turns = math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1
         # the climb over the root end spread over about two elements (at least 0.3 rad)

@@ -175,11 +175,6 @@ class Wall:
         return Bending(float(d[0, 0]), float(d[0, 1]), float(d[1, 1]), float(d[2, 2]))
 
     @property
-    def in_plane_modulus(self) -> float:
-        """A11 / h [Pa]: the wall's mean Young's modulus along the tape (E for an isotropic wall)."""
-        return float(self.A[0, 0] / self.h)
-
-    @property
     def axial_modulus(self) -> float:
         """1 / (h (A^-1)_11) [Pa]: the modulus of a strip pulled along its length with its width
         free to contract (E for an isotropic wall), the E of beam formulas."""

@@ -172,7 +172,9 @@ def tape_fold(
     strip = create_strip_mesh(comm, geom, res)
     model = NaghdiShell(strip, shell_material(config), director_frame="global")
     root = clamp(model, ROOT)
-    end = RigidSection(model, FREE_END, axis=np.array([0.0, 1.0, 0.0]), stiffness=100 * config.wall.A[0, 0])
+    end = RigidSection(
+        model, FREE_END, axis=np.array([0.0, 1.0, 0.0]), stiffness=100 * config.wall.axial_modulus * tp.h
+    )
     h_e = length / res.along
     c, previous, viscous = model.relaxation(length_scale=h_e)
     total_energy = model.strain_energy + end.energy
