@@ -14,6 +14,7 @@ The package: :mod:`~tapecoil.config.params` (a field's unit and range, the check
 writing TOML).
 """
 
+from tapecoil.config.laminate import LaminateConfig
 from tapecoil.config.params import NON_NEGATIVE, POSITIVE, ConfigError, ConfigWarning, Range, param
 from tapecoil.config.sections import (
     CoilingConfig,
@@ -21,7 +22,6 @@ from tapecoil.config.sections import (
     ContactConfig,
     DeploymentConfig,
     HubConfig,
-    LaminateConfig,
     MeshConfig,
     OutputConfig,
     PayoutConfig,
