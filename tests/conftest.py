@@ -27,3 +27,21 @@ def pytest_collection_modifyitems(config, items):
 def cfg():
     """The benchmark tape of the physics brief (the configuration defaults)."""
     return load_config()
+
+
+@pytest.fixture
+def coil_last_row():
+    """A function: flatten a configuration's tape and coil it by ``angle`` on ``comm``; returns
+    the last history row (for comparing a run on several ranks with one on each rank alone)."""
+
+    def run(config, comm, angle):
+        from tapecoil.phases.coiling import CoilingModel
+        from tapecoil.phases.coiling_run import CoilingRun
+
+        model = CoilingModel(config, comm)
+        coiling = CoilingRun(model)
+        coiling.flatten()
+        coiling.coil(angle)
+        return coiling.result.history[-1]
+
+    return run

@@ -187,21 +187,11 @@ def test_bad_coiling_config_is_rejected_before_computing():
 
 @pytest.mark.mpi
 @pytest.mark.parametrize("predictor", ["secant", "shift"])
-def test_two_ranks_coil_as_one(predictor):
+def test_two_ranks_coil_as_one(predictor, coil_last_row):
     """The same short coiling run distributed over the ranks and on each rank alone."""
-    from tapecoil.phases.coiling import CoilingModel
-    from tapecoil.phases.coiling_run import CoilingRun
-
-    def coil(comm):
-        cfg = short_tape(hub_angle=0.5)
-        cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, predictor=predictor))
-        model = CoilingModel(cfg, comm)
-        run = CoilingRun(model)
-        run.flatten()
-        run.coil(0.5)
-        return run.result.history[-1]
-
-    parallel, serial = coil(MPI.COMM_WORLD), coil(MPI.COMM_SELF)
+    cfg = short_tape(hub_angle=0.5)
+    cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, predictor=predictor))
+    parallel, serial = coil_last_row(cfg, MPI.COMM_WORLD, 0.5), coil_last_row(cfg, MPI.COMM_SELF, 0.5)
     assert MPI.COMM_WORLD.size > 1
     for key in ("strain_energy", "bending_energy", "coiled_length", "outer_radius", "end_slide"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-6), key

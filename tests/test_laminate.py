@@ -358,20 +358,11 @@ def test_cfrp_tape_coils_to_its_orthotropic_plate_state(tmp_path):
 
 
 @pytest.mark.mpi
-def test_cfrp_tape_coils_on_two_ranks_as_on_one():
+def test_cfrp_tape_coils_on_two_ranks_as_on_one(coil_last_row):
     from mpi4py import MPI
 
-    from tapecoil.phases.coiling import CoilingModel
-    from tapecoil.phases.coiling_run import CoilingRun
-
-    def coil(comm):
-        model = CoilingModel(cfrp_short(0.5), comm)
-        run = CoilingRun(model)
-        run.flatten()
-        run.coil(0.5)
-        return run.result.history[-1]
-
-    parallel, serial = coil(MPI.COMM_WORLD), coil(MPI.COMM_SELF)
+    config = cfrp_short(0.5)
+    parallel, serial = coil_last_row(config, MPI.COMM_WORLD, 0.5), coil_last_row(config, MPI.COMM_SELF, 0.5)
     assert MPI.COMM_WORLD.size > 1
     for key in ("strain_energy", "bending_energy", "membrane_energy", "coiled_length", "end_slide"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-6), key
