@@ -164,6 +164,25 @@ def test_deploy_refuses_a_missing_checkpoint(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_verification_case_whose_solve_fails_is_reported_not_raised(monkeypatch, capsys):
+    """A case whose continuation gives up fails with its reason on one line; the others run."""
+    import tapecoil.verification.cases as cases
+    from tapecoil.core.stepping import ContinuationError
+
+    real = cases.run_case
+
+    def failing_fold(name, *args, **kwargs):
+        if name == "tape-fold":
+            raise ContinuationError("no convergence at load 0.2 (a stand-in for a failed snap)", 0.1)
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(cases, "run_case", failing_fold)
+    assert main(["verify", "tape-fold"]) == 1
+    err = capsys.readouterr().err
+    assert "tapecoil: tape-fold stopped: no convergence at load 0.2" in err and "Traceback" not in err
+    assert main(["verify", "stress-free", "--json"]) == 0
+
+
 SHORT_RUN = (
     "[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.5\n[mesh]\npreset = 'coarse'\n"
     "[deployment]\nt_end = 0.003\nrelease_time = 0.0005\n[output]\nvtx_every = 2\ncheckpoint_every = 2\n"

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
-from tapecoil.app.commands.common import echo
+from tapecoil.app.commands.common import echo, rank
 from tapecoil.config import load_config
 
 
@@ -13,14 +14,23 @@ def cmd_verify(args: argparse.Namespace) -> int:
     import time
 
     config = load_config(args.config)
+    from tapecoil.core.stepping import ContinuationError
     from tapecoil.verification import CASES
     from tapecoil.verification.cases import run_case
 
     names = CASES if args.case == "all" else (args.case,)
-    results = []
+    results, stopped = [], {}
     for name in names:
         t0 = time.perf_counter()
-        result = run_case(name, config, args.mesh)
+        try:
+            result = run_case(name, config, args.mesh)
+        except ContinuationError as exc:
+            # a case whose solve fails is a failed case with its reason, not a traceback; the
+            # other cases still run
+            stopped[name] = str(exc)
+            if rank() == 0:
+                print(f"tapecoil: {name} stopped: {exc}", file=sys.stderr, flush=True)
+            continue
         result.info["case_wall_time"] = time.perf_counter() - t0
         results.append(result)
         if not args.json:
@@ -53,5 +63,6 @@ def cmd_verify(args: argparse.Namespace) -> int:
             }
             for r in results
         ]
+        payload += [{"case": name, "passed": False, "stopped": reason} for name, reason in stopped.items()]
         echo(json.dumps(payload, indent=2, default=float))
-    return 0 if all(r.passed for r in results) else 1
+    return 0 if all(r.passed for r in results) and not stopped else 1
