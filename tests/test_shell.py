@@ -185,6 +185,64 @@ def test_continuation_stops_with_the_last_converged_state():
     assert [round(s.load, 6) for s in run.history] == [0.2, 0.4, 0.5]
 
 
+def test_a_failed_relaxation_cuts_the_step_back_and_relaxes_again():
+    """A snap at load 0.5 that the relaxation passes only from within 0.02 of it: after the
+    relaxation fails from the first cut-back's step, a shorter step relaxes through.
+
+    The model: a plain solve converges on the first branch (x = t, t <= 0.5) or, once there,
+    on the second (x = 1 + t); a relaxed solve falls onto the second branch from loads at most
+    0.02 past the snap, and fails beyond.
+    """
+    from types import SimpleNamespace
+
+    from tapecoil.config import StepControl
+    from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation
+
+    space = SimpleNamespace(
+        dofmap=SimpleNamespace(index_map=SimpleNamespace(size_local=1), index_map_bs=1),
+        mesh=SimpleNamespace(comm=MPI.COMM_SELF),
+    )
+    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)), function_space=space)
+    load = {"t": 0.0}
+    relaxation = Relaxation(
+        SimpleNamespace(value=0.0),
+        SimpleNamespace(x=SimpleNamespace(array=np.zeros(1))),
+        1.0,
+        max_iterations=5,
+    )
+
+    def solve():
+        t, x = load["t"], state.x.array
+        if relaxation.coefficient.value > 0:  # a pseudo-time step
+            ok = t - 0.5 <= 0.02
+        else:
+            ok = t <= 0.5 or x[0] >= 1.0
+        if ok:
+            x[:] = t if (t <= 0.5 and x[0] < 1.0 and relaxation.coefficient.value == 0) else 1.0 + t
+        else:
+            x[:] = np.nan
+        return SimpleNamespace(converged=ok, iterations=2)
+
+    control = StepControl(
+        initial_step=0.1, max_step=0.1, min_step=1e-3, grow=1.0, cutback=0.5, max_cutbacks=1
+    )
+    run = Continuation(solve, lambda t: load.update(t=t), state, control, relaxation=relaxation)
+    history = run.run(0.0, 1.0)
+    snap = next(r for r in history if r.relaxed)
+    # from 0.5: 0.6 and 0.55 fail (one cut-back), relaxing at 0.525 fails, at 0.5125 it passes
+    assert snap.load == pytest.approx(0.5125)
+    assert history[-1].load == pytest.approx(1.0) and state.x.array[0] == pytest.approx(2.0)
+    # without a step short enough, the run still stops with the last converged state
+    state.x.array[:], load["t"] = 0.0, 0.0
+    short = StepControl(initial_step=0.1, max_step=0.1, min_step=0.05, grow=1.0, cutback=0.5, max_cutbacks=1)
+    stuck = Continuation(solve, lambda t: load.update(t=t), state, short, relaxation=relaxation)
+    with pytest.raises(
+        ContinuationError, match=r"even with pseudo-transient relaxation .*last converged load 0\.5"
+    ):
+        stuck.run(0.0, 1.0)
+    assert state.x.array[0] == pytest.approx(0.5)
+
+
 def test_error_controlled_steps_meet_their_tolerance():
     """With an error estimate, steps whose error exceeds the tolerance are repeated shorter,
     and the accepted ones settle where the error is just below it.

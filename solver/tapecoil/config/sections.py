@@ -162,7 +162,8 @@ class SolverConfig:
         grow: factor by which the step grows after an easy step [-].
         cutback: factor by which the step shrinks after a failed step [-].
         max_cutbacks: consecutive cut-backs of a failing step before the run stops or, where
-            the phase can (coiling, tape fold), passes it by pseudo-transient relaxation [-].
+            the phase can (coiling, tape fold), passes it by pseudo-transient relaxation (a
+            failed relaxation is followed by further cut-backs, down to min_step) [-].
             0: each phase's own (8; the tape fold 4, so that it relaxes early through its snap).
         petsc_options: PETSc options without prefix for every solver, e.g.
             {snes_monitor = "", mat_mumps_icntl_14 = 50}; [coiling] and [deployment]

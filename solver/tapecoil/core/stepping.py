@@ -6,7 +6,9 @@ cut back. A step that still fails after ``max_cutbacks`` consecutive cut-backs, 
 smallest allowed step, is retried with pseudo-transient relaxation when the caller provides
 one: a viscous term c (q - q_prev) is added and a sequence of pseudo-time solves at the fixed
 target load lets the state fall through the instability (a snap) to the next stable branch,
-where a plain Newton solve finishes. If that fails too, the run stops with
+where a plain Newton solve finishes. If that fails too, the step is cut back again and
+retried (Newton, then relaxation) while it is at least the smallest allowed step: from nearer
+the snap's turning point the relaxation has less far to fall. Below that the run stops with
 :class:`ContinuationError`; the state is then the last converged one.
 
 With an ``error`` estimate (time stepping), a converged step is also judged on its accuracy:
@@ -174,9 +176,13 @@ class Continuation:
                 if not ok:
                     self.state.x.array[:] = saved
                     self.set_load(t)
+                    # a shorter step lands nearer the snap's turning point, from where the
+                    # relaxation has less far to go: cut back again while the step allows
+                    if abs(dt) >= ctl.min_step * abs(span):
+                        continue
                     raise ContinuationError(
-                        f"no convergence at load {target:.6g}, even with pseudo-transient relaxation; "
-                        f"last converged load {t:.6g}",
+                        f"no convergence at load {target:.6g}, even with pseudo-transient relaxation "
+                        f"(down to a step of {abs(dt / ctl.cutback):.3g}); last converged load {t:.6g}",
                         t,
                     )
                 relaxed = True
