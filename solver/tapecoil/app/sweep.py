@@ -17,7 +17,7 @@ Parameters are configuration keys ("tape.h", "coiling.tension", ...) or "hub.rad
 the hub radius as a fraction of tape.R. Every case's configuration is checked before anything is
 computed; in the coil and run studies, rank 0 also warns then of each case's pull below the
 tension its hub needs (``Config.coiling_warnings``, the message in the case's run.log too; the
-coiling_tension study sets its own pull, T = Eq. 2.6 + excess, and its own hub angle and tape
+coiling_tension study sets its own pull, T = Eq. 2.6 at r_c + excess, and its own hub angle and tape
 length, so it warns of nothing, but each case's configuration, hub_angle included, must still
 be valid). Under ``mpirun -n N`` the ranks form N / ranks_per_case groups, and case i runs on group
 i mod groups, each into its own results directory ``case-NN-<values>``. Rank 0 then writes the
@@ -266,13 +266,16 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
         grid = np.linspace(0.9 * ratio.min(), 1.1 * ratio.max(), 200)
         ax.plot(
             grid,
-            [theory.coiling_tension_bending(bending, tp.alpha, tp.R, x * tp.R) for x in grid],
+            [theory.coiling_tension_bending(bending, tp.alpha, tp.R, x * tp.R + tp.h / 2) for x in grid],
             "--",
-            label="Eq. 2.6 (bending-dominated)",
+            label="Eq. 2.6 (bending-dominated), mid-surface radius r_c + h/2",
         )
         ax.plot(
             grid,
-            [theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, x * tp.R) for x in grid],
+            [
+                theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, x * tp.R + tp.h / 2)
+                for x in grid
+            ],
             ":",
             label="Eq. 2.9 (tension-dominated)",
         )
