@@ -366,3 +366,23 @@ def test_cfrp_tape_coils_on_two_ranks_as_on_one(coil_last_row):
     assert MPI.COMM_WORLD.size > 1
     for key in ("strain_energy", "bending_energy", "membrane_energy", "coiled_length", "end_slide"):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-6), key
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("preset", ["coarse", "default"])
+def test_cfrp_tape_folds_at_its_orthotropic_plateau(preset):
+    """The [0/90]s tape's opposite-sense fold (physics brief Sec. 10): the moment plateau
+    alpha (sqrt(D11 D22) + D12) within 5 %, the fold radius R sqrt(D11/D22) = 2.3 R within 10 %,
+    the section flat in the fold. The fold's energy per unit area is not held to the 5 % of the
+    isotropic case: it comes out 6 % below w(R sqrt(D11/D22)) on both meshes (docs/laminates.md)."""
+    from tapecoil.verification.cases import run_case
+
+    result = run_case("tape-fold", load_config(CFRP), preset)
+    checks = {c.name.split(" /")[0].split(" in the")[0]: c for c in result.checks}
+    assert result.info["snap_angle"] is not None  # it went through the snap
+    for name in ("moment plateau", "fold radius", "transverse curvature"):
+        assert checks[name].passed, (name, checks[name].computed)
+    # the fold is 2.3 R, not the isotropic tape's R: the check does see D11 / D22
+    config = load_config(CFRP)
+    measured = checks["fold radius"].computed * th.fold_radius(config.wall.bending, config.tape.R)
+    assert measured > 2 * config.tape.R
