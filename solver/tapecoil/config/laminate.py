@@ -36,7 +36,7 @@ class LaminateConfig:
         B: ('matrices') coupling stiffness [B11, B12, B16, B22, B26, B66] [N]; empty: 0.
         D: ('matrices') bending stiffness [D11, D12, D16, D22, D26, D66] [N m].
         H: ('matrices') transverse shear stiffness [H11, H12, H22], order (13, 23), the shear
-            correction included [N/m]; empty: 5/6 A66 (I + 0).
+            correction included [N/m]; empty: 5/6 A66 on the diagonal, 0 off it.
     """
 
     kind: str = param("isotropic", "", ("isotropic", "plies", "matrices"))

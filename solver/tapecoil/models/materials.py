@@ -93,13 +93,13 @@ class LaminateMaterial:
         E = P.T * S * P
         return ufl.as_vector([E[0, 0], E[1, 1], 2 * E[0, 1]])
 
-    def _local(self, A, e, k, g):
-        P = self._frame(A)
+    def _local(self, P, e, k, g):
+        """The strains (e, k, g) in the frame P: two Voigt vectors and the shear vector."""
         return self._voigt(P, e), self._voigt(P, k), P.T * g
 
     def energy_densities(self, A, e, k, g):
         """Membrane, bending (with the coupling B) and shear energy per unit reference area."""
-        eps, kap, gam = self._local(A, e, k, g)
+        eps, kap, gam = self._local(self._frame(A), e, k, g)
         bending = 0.5 * ufl.dot(kap, self._D * kap)
         if self._coupled:
             bending += ufl.dot(eps, self._B * kap)
@@ -107,8 +107,9 @@ class LaminateMaterial:
 
     def work_densities(self, A, strains, variations):
         """Virtual work of the resultants of (e, k, g) on (de, dk, dg), parted as the energies."""
-        eps, kap, gam = self._local(A, *strains)
-        deps, dkap, dgam = self._local(A, *variations)
+        P = self._frame(A)
+        eps, kap, gam = self._local(P, *strains)
+        deps, dkap, dgam = self._local(P, *variations)
         bending = ufl.dot(self._D * kap, dkap)
         if self._coupled:
             bending += ufl.dot(self._B * eps, dkap) + ufl.dot(self._B * kap, deps)

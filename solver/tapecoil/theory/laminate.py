@@ -112,7 +112,6 @@ class Wall:
     H: np.ndarray = field(repr=False)
     h: float
     plies: tuple[Ply, ...] = field(repr=False)
-    kind: str = "isotropic"
 
     @classmethod
     def isotropic(cls, E: float, nu: float, h: float) -> Wall:
@@ -150,13 +149,13 @@ class Wall:
             z = z1
         # a symmetric layup's B is zero but for round-off of the sums: make it exactly zero
         B[np.abs(B) <= 1e-12 * h * np.abs(A).max()] = 0.0
-        return cls(A, B, D, SHEAR_CORRECTION * H, h, tuple(plies), "plies")
+        return cls(A, B, D, SHEAR_CORRECTION * H, h, tuple(plies))
 
     @classmethod
     def from_matrices(cls, A, B, D, H, h: float) -> Wall:
         """A wall given by its matrices (A, B, D 3 x 3; H 2 x 2, the shear correction included)."""
         A, B, D, H = (np.asarray(x, dtype=float) for x in (A, B, D, H))
-        return cls(A, B, D, H, h, (Ply(-h / 2, h / 2, 12 * D / h**3),), "matrices")
+        return cls(A, B, D, H, h, (Ply(-h / 2, h / 2, 12 * D / h**3),))
 
     @property
     def stiffness(self) -> np.ndarray:
