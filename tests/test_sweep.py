@@ -41,6 +41,17 @@ def test_the_demo_sweep_file_is_valid():
     assert sweep.config(cases[0]).hub.radius == pytest.approx(0.5 * 0.0151)
 
 
+@pytest.mark.parametrize("name", ["coiling_regimes.toml", "coiling_regimes_benchmark.toml"])
+def test_the_regime_sweep_files_are_valid(name):
+    from tapecoil.app.sweep import load_sweep
+    from tapecoil.phases.wrapping import WrapStudy
+
+    sweep = load_sweep(Path(__file__).parents[1] / "demos" / name)
+    ratios = [c["hub.radius_over_R"] for c in sweep.cases()]
+    assert ratios[0] == 0.4 and ratios[-1] == 5.25 and sweep.study == "wrapping"
+    assert isinstance(sweep.study_options(), WrapStudy)
+
+
 def test_cases_are_every_combination(tmp_path):
     from tapecoil.app.sweep import load_sweep
 
@@ -53,6 +64,9 @@ def test_cases_are_every_combination(tmp_path):
     cases = sweep.cases()
     assert len(cases) == 6 and cases[-1] == {"tape.h": 2e-4, "coiling.tension": 3}
     assert sweep.config(cases[-1]).tape.h == 2e-4
+
+
+WRAPPING = '[sweep]\nstudy = "wrapping"\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.wrapping]\n'
 
 
 @pytest.mark.parametrize(
@@ -74,6 +88,18 @@ def test_cases_are_every_combination(tmp_path):
         (
             '[sweep]\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.tension]\nlen = 1\n',
             r"sweep\.tension\.len",
+        ),
+        (
+            WRAPPING + "pull = 1\n",
+            r"sweep\.wrapping\.pull",
+        ),
+        (
+            '[sweep]\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.wrapping]\nrelease = 0.01\n',
+            r"sweep\.wrapping is for study = 'wrapping' only",
+        ),
+        (
+            WRAPPING + "conform_angle = 350.0\n",
+            r"conform_angle and wrap_angle",
         ),
     ],
 )

@@ -4,7 +4,7 @@ A sweep file is a configuration file (the base case: any of its tables, defaults
 with a ``[sweep]`` table::
 
     [sweep]
-    study = "coiling_tension"      # or "coil" (coiling runs) or "run" (coil, stow, deploy)
+    study = "coiling_tension"      # or "wrapping", "coil" (coiling runs), "run" (coil, stow, deploy)
     ranks_per_case = 1             # the size of each case's sub-communicator
 
     [sweep.parameters]             # every combination of these values is a case
@@ -12,6 +12,9 @@ with a ``[sweep]`` table::
 
     [sweep.tension]                # options of the coiling_tension study (coiling.TensionStudy)
     preset = "default"
+
+    [sweep.wrapping]               # options of the wrapping study (wrapping.WrapStudy)
+    release = 0.005
 
 Parameters are configuration keys ("tape.h", "coiling.tension", ...) or "hub.radius_over_R",
 the hub radius as a fraction of tape.R. Every case's configuration is checked before anything is
@@ -21,15 +24,18 @@ coiling_tension study sets its own pull, T = Eq. 2.6 at r_c + excess, and its ow
 length, so it warns of nothing, but each case's configuration, hub_angle included, must still
 be valid). Under ``mpirun -n N`` the ranks form N / ranks_per_case groups, and case i runs on group
 i mod groups, each into its own results directory ``case-NN-<values>``. Rank 0 then writes the
-summary table (sweep_summary.csv, sweep_summary.json) and a plot (sweep.png: the coiling tension
-against r_c/R with Eq. 2.6 and Eq. 2.9 drawn in, or each validated quantity's ratio to its
-reference against the first parameter).
+summary table (sweep_summary.csv, sweep_summary.json) and a plot (sweep.png: the coiling tension,
+or the wrapping study's required tension, against r_c/R with Eq. 2.6, the loss-of-uniqueness band
+and Eq. 2.9 drawn in; or each validated quantity's ratio to its reference against the first
+parameter). The wrapping study (:mod:`tapecoil.phases.wrapping`) also sets its own tape length,
+hub angle, pull and mesh.
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import importlib
 import itertools
 import json
 import math
@@ -46,7 +52,12 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-STUDIES = ("coiling_tension", "coil", "run")
+STUDIES = ("coiling_tension", "wrapping", "coil", "run")
+# the studies with options of their own: the sweep table that holds them, and their dataclass
+STUDY_OPTIONS = {
+    "coiling_tension": ("tension", "tapecoil.phases.tension_study", "TensionStudy"),
+    "wrapping": ("wrapping", "tapecoil.phases.wrapping", "WrapStudy"),
+}
 DERIVED = ("hub.radius_over_R",)
 
 
@@ -59,6 +70,16 @@ class Sweep:
     parameters: dict[str, list]
     ranks_per_case: int
     tension: dict
+    wrapping: dict = dataclasses.field(default_factory=dict)
+
+    def study_options(self):
+        """The options object of the study (TensionStudy or WrapStudy), or None."""
+        if self.study not in STUDY_OPTIONS:
+            return None
+        table, module, name = STUDY_OPTIONS[self.study]
+        cls = getattr(importlib.import_module(module), name)
+        values = getattr(self, table)
+        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
 
     def cases(self) -> list[dict]:
         """Every combination of the parameter values, in order: [{key: value, ...}, ...]."""
@@ -95,7 +116,7 @@ def load_sweep(path: str | Path) -> Sweep:
     table = data.pop("sweep", None)
     if not isinstance(table, dict):
         raise ConfigError(f"{path} has no [sweep] table")
-    known = {"study", "ranks_per_case", "parameters", "tension"}
+    known = {"study", "ranks_per_case", "parameters", *(table for table, _, _ in STUDY_OPTIONS.values())}
     unknown = set(table) - known
     if unknown:
         raise ConfigError(f"unknown key sweep.{sorted(unknown)[0]} (known: {', '.join(sorted(known))})")
@@ -123,16 +144,21 @@ def load_sweep(path: str | Path) -> Sweep:
             raise ConfigError(
                 f'sweep.parameters."{key}" is neither a configuration key (section.key) nor one of {DERIVED}'
             )
-    tension = table.get("tension", {})
-    from tapecoil.phases.tension_study import TensionStudy
-
-    fields = {f.name for f in dataclasses.fields(TensionStudy)}
-    for key in tension:
-        if key not in fields:
-            raise ConfigError(f"unknown key sweep.tension.{key} (known: {', '.join(sorted(fields))})")
-    if study != "coiling_tension" and tension:
-        raise ConfigError("sweep.tension is for study = 'coiling_tension' only")
-    sweep = Sweep(study, data, parameters, ranks, tension)
+    options = {}
+    for name, (key, module, cls_name) in STUDY_OPTIONS.items():
+        values = table.get(key, {})
+        if not isinstance(values, dict):
+            raise ConfigError(f"sweep.{key} must be a table")
+        fields = {f.name for f in dataclasses.fields(getattr(importlib.import_module(module), cls_name))}
+        for option in values:
+            if option not in fields:
+                raise ConfigError(f"unknown key sweep.{key}.{option} (known: {', '.join(sorted(fields))})")
+        if values and study != name:
+            raise ConfigError(f"sweep.{key} is for study = {name!r} only")
+        options[key] = values
+    sweep = Sweep(study, data, parameters, ranks, options["tension"], options["wrapping"])
+    if study == "wrapping":
+        sweep.study_options().check()
     config_from_dict(json.loads(json.dumps(data)))  # the base case itself
     for case in sweep.cases():
         sweep.config(case)
@@ -161,7 +187,7 @@ def run_sweep(sweep: Sweep, directory: str | Path, comm=MPI.COMM_WORLD, progress
         directory.mkdir(parents=True, exist_ok=True)
     comm.barrier()
     cases = sweep.cases()
-    if sweep.study != "coiling_tension" and comm.rank == 0:
+    if sweep.study not in STUDY_OPTIONS and comm.rank == 0:
         from tapecoil.app.checks import warn_before_coiling
 
         for case in cases:  # every case's, before any case is computed
@@ -191,16 +217,20 @@ def _run_case(sweep: Sweep, index: int, case: dict, directory: Path, comm) -> No
     if sweep.study == "coiling_tension":
         from tapecoil.app.results import prepare_directory
         from tapecoil.core.output import write_csv
-        from tapecoil.phases.tension_study import TensionStudy, coiling_tension
+        from tapecoil.phases.tension_study import coiling_tension
 
         prepare_directory(directory, config, comm)
-        options = {k: tuple(v) if isinstance(v, list) else v for k, v in sweep.tension.items()}
-        result = coiling_tension(config, comm, TensionStudy(**options))
+        result = coiling_tension(config, comm, sweep.study_options())
         write_csv(directory / "coiling_history.csv", result.pop("history"), comm)
         if comm.rank == 0:
             (directory / "summary.json").write_text(
                 json.dumps({"case": case, "coiling_tension": result}, indent=2)
             )
+        return
+    if sweep.study == "wrapping":
+        from tapecoil.app.wrapping import write_wrapping_case
+
+        write_wrapping_case(config, sweep.study_options(), directory, comm, case)
         return
     from tapecoil.app.checks import warn_before_coiling
     from tapecoil.app.pipeline import run
@@ -232,6 +262,29 @@ def _summarise(sweep: Sweep, cases: list[dict], directory: Path, groups: int) ->
                     "wall_time": t["wall_time"],
                 }
             )
+        elif sweep.study == "wrapping":
+            w = summary["wrapping"]
+            row.update(
+                {
+                    k: w[k]
+                    for k in (
+                        "ratio",
+                        "regime",
+                        "required_tension",
+                        "lift_off_tension",
+                        "eq_2_6",
+                        "eq_2_9",
+                        "max_folds",
+                        "fold_radius_min",
+                        "fold_radius_max",
+                        "completed",
+                        "steps",
+                        "newton_iterations",
+                        "dofs",
+                        "wall_time",
+                    )
+                }
+            )
         else:
             row["completed"] = summary["completed"]
             for v in summary["validation"]:
@@ -257,28 +310,12 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
     import numpy as np
 
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    if sweep.study == "coiling_tension":
-        from tapecoil import theory
+    if sweep.study in STUDY_OPTIONS:
+        from tapecoil.post.plots import draw_regime_laws
 
-        config = sweep.config({})
-        tp, bending = config.tape, config.wall.bending
         ratio = np.array([r["ratio"] for r in rows])
-        grid = np.linspace(0.9 * ratio.min(), 1.1 * ratio.max(), 200)
-        ax.plot(
-            grid,
-            [theory.coiling_tension_bending(bending, tp.alpha, tp.R, x * tp.R + tp.h / 2) for x in grid],
-            "--",
-            label="Eq. 2.6 (bending-dominated), mid-surface radius r_c + h/2",
-        )
-        ax.plot(
-            grid,
-            [
-                theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, x * tp.R + tp.h / 2)
-                for x in grid
-            ],
-            ":",
-            label="Eq. 2.9 (tension-dominated)",
-        )
+        draw_regime_laws(ax, sweep.config({}), (0.9 * ratio.min(), 1.1 * ratio.max()))
+    if sweep.study == "coiling_tension":
         ax.errorbar(
             ratio,
             [r["coiling_tension"] for r in rows],
@@ -288,7 +325,37 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
             label="shell: mean T - N over the steady phase (bar: spread)",
         )
         ax.set(xlabel="r_c / R", ylabel="coiling tension [N]", title="steady coiling tension")
-    else:
+    elif sweep.study == "wrapping":
+        done = [r for r in rows if r["required_tension"] is not None]
+        ax.plot(
+            [r["ratio"] for r in done],
+            [r["required_tension"] for r in done],
+            "o",
+            label="shell: force on the end when the centre line conforms over 305 deg (wrapping)",
+        )
+        ax.plot(
+            [r["ratio"] for r in done],
+            [r["lift_off_tension"] for r in done],
+            "o",
+            mfc="none",
+            label="shell: the same, less the axial force the clamped root holds (T - N)",
+        )
+        for r in done:
+            if r["max_folds"]:
+                ax.annotate(
+                    f"{r['max_folds']}",
+                    (r["ratio"], r["required_tension"]),
+                    fontsize=7,
+                    xytext=(3, 3),
+                    textcoords="offset points",
+                )
+        ax.set(
+            xlabel="r_c / R",
+            ylabel="tension [N]",
+            title="tension needed to wrap (number: most folds seen)",
+            yscale="symlog",
+        )
+    if sweep.study not in STUDY_OPTIONS:
         key = next(iter(sweep.parameters))
         x = np.array([r[key] for r in rows], dtype=float)
         quantities = sorted({k[: -len(".reference")] for r in rows for k in r if k.endswith(".reference")})

@@ -24,20 +24,35 @@ def centre_nodes(tape: TapeOnHub) -> np.ndarray:
     return distance <= tape.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * tape.config.tape.b
 
 
+def _line(tape: TapeOnHub, mask: np.ndarray) -> dict[str, np.ndarray]:
+    """The owned nodes of ``mask`` on every rank, sorted along the tape: xi_1, psi, radius."""
+    nodes = tape.contact.nodes
+    n_owned = nodes.space.dofmap.index_map.size_local
+    radius, _ = tape.contact.polar(nodes.positions(tape.model.q.x.array)[:, :n_owned])
+    local = np.column_stack(
+        [nodes.xi[0, :n_owned][mask], tape.contact.psi.x.array[:n_owned][mask], radius[mask]]
+    )
+    rows = np.vstack(tape.comm.allgather(local))
+    rows = rows[np.argsort(rows[:, 0])]
+    return {"xi1": rows[:, 0], "psi": rows[:, 1], "radius": rows[:, 2]}
+
+
+def edge_lines(tape: TapeOnHub) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The two free edges (xi_2 = -b/2 and +b/2) of the whole tape, as :func:`centre_line`
+    (collective, every rank)."""
+    nodes = tape.contact.nodes
+    xi2 = nodes.xi[1, : nodes.space.dofmap.index_map.size_local]
+    half = tape.config.tape.b / 2
+    near = 1e-9 * tape.config.tape.b
+    return _line(tape, xi2 <= -half + near), _line(tape, xi2 >= half - near)
+
+
 def centre_line(tape: TapeOnHub) -> dict[str, np.ndarray]:
     """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
 
     Columns: xi_1, winding angle psi, mid-surface distance from the hub axis.
     """
-    nodes = tape.contact.nodes
-    n_owned = nodes.space.dofmap.index_map.size_local
-    xi = nodes.xi[:, :n_owned]
-    mask = centre_nodes(tape)
-    radius, _ = tape.contact.polar(nodes.positions(tape.model.q.x.array)[:, :n_owned])
-    local = np.column_stack([xi[0][mask], tape.contact.psi.x.array[:n_owned][mask], radius[mask]])
-    rows = np.vstack(tape.comm.allgather(local))
-    rows = rows[np.argsort(rows[:, 0])]
-    return {"xi1": rows[:, 0], "psi": rows[:, 1], "radius": rows[:, 2]}
+    return _line(tape, centre_nodes(tape))
 
 
 def coil_geometry(tape: TapeOnHub, angle: float) -> dict[str, float]:

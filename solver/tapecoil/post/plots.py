@@ -378,3 +378,47 @@ def all_figures(directory: str | Path) -> list[Path]:
     """Every figure the directory has data for."""
     directory = Path(directory)
     return [p for p in (f(directory) for f in FIGURES) if p is not None]
+
+
+def draw_regime_laws(ax, config, ratio_range: tuple[float, float]) -> None:
+    """The coiling-tension laws against r_c / R at the mid-surface radius r_c + h/2 (physics
+    brief Sec. 5 and 10): Eq. 2.6 where it is positive, the loss-of-uniqueness band
+    1 < r_c/R < 3.424 shaded, and Eq. 2.9."""
+    tp, bending = config.tape, config.wall.bending
+    lo, hi = ratio_range
+    grid = np.linspace(lo, hi, 300)
+    bend = np.array(
+        [theory.coiling_tension_bending(bending, tp.alpha, tp.R, x * tp.R + tp.h / 2) for x in grid]
+    )
+    keep = bend > 0
+    ax.plot(grid[keep], bend[keep], "--", label="Eq. 2.6 (bending-dominated), mid-surface radius r_c + h/2")
+    ax.plot(
+        grid,
+        [
+            theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, x * tp.R + tp.h / 2)
+            for x in grid
+        ],
+        ":",
+        label="Eq. 2.9 (tension-dominated)",
+    )
+    ax.axvspan(max(lo, 1.0), min(hi, 3.424), color="0.9", zorder=0, label="loss of uniqueness (T ~ 0)")
+
+
+def force_extension(history: list[dict], required: float | None, conform_angle: float, path: Path) -> Path:
+    """The wrapping study's force against the end's displacement, with the conforming wrap."""
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7.0, 6.0), sharex=True)
+    for phase, style in (("release", "-"), ("pull", "-")):
+        rows = [r for r in history if r["phase"] == phase]
+        if not rows:
+            continue
+        d = [1e3 * r["end_displacement"] for r in rows]
+        ax.plot(d, [r["force"] for r in rows], style, marker=".", label=phase)
+        ax2.plot(d, [r["conforming_wrap_deg"] for r in rows], style, marker=".", label=phase)
+        folds = [r["folds"] for r in rows]
+        ax2.scatter(d, [r["conforming_wrap_deg"] for r in rows], c=folds, s=12, cmap="viridis", zorder=3)
+    if required is not None:
+        ax.axhline(required, color="k", lw=0.8, label=f"required tension {required:.3g} N")
+    ax2.axhline(conform_angle, color="k", lw=0.8)
+    ax.set(ylabel="force on the end [N]", title="wrapping: force against extension")
+    ax2.set(xlabel="end displacement along the pull [mm]", ylabel="conforming wrap [deg] (colour: folds)")
+    return _save(fig, path)
