@@ -67,6 +67,18 @@ def test_two_folds_are_counted_with_their_radii_and_the_wrap_ends_at_the_first()
     assert reading["largest_gap"] == pytest.approx(40 * H, rel=1e-3)
 
 
+def test_a_stretch_standing_loose_off_the_cylinder_is_not_a_fold():
+    psi = np.linspace(0, math.radians(340), 3401)
+    a, b = math.radians(60), math.radians(260)
+    inside = (psi > a) & (psi < b)
+    radius = RHO + 10 * H * np.where(inside, np.sin(math.pi * (psi - a) / (b - a)) ** 2, 0)
+    reading = wrap_measure(psi, radius, RHO, H, math.radians(340))
+    assert reading["folds"] == 0 and reading["largest_gap"] == pytest.approx(10 * H, rel=1e-4)
+    # the same stretch, tighter than the cylinder at its crest, is a fold
+    radius = RHO + 10 * H * np.where(inside, np.sin(math.pi * (psi - a) / (b - a)) ** 40, 0)
+    assert wrap_measure(psi, radius, RHO, H, math.radians(340))["folds"] == 1
+
+
 def test_a_loose_wrap_running_into_the_lift_off_is_not_a_fold():
     psi = np.linspace(0, math.radians(340), 3401)
     # off the hub by 5 h from 150 deg on (a coil looser than the hub), then leaving it
