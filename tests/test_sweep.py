@@ -41,6 +41,13 @@ def test_the_demo_sweep_file_is_valid():
     assert sweep.config(cases[0]).hub.radius == pytest.approx(0.5 * 0.0151)
 
 
+def test_the_steel_tension_sweep_file_is_valid():
+    from tapecoil.app.sweep import load_sweep
+
+    sweep = load_sweep(Path(__file__).parents[1] / "demos" / "coiling_tension_steel.toml")
+    assert sweep.study == "coiling_tension" and sweep.config(sweep.cases()[0]).tape.R == 0.0192
+
+
 @pytest.mark.parametrize("name", ["coiling_regimes.toml", "coiling_regimes_benchmark.toml"])
 def test_the_regime_sweep_files_are_valid(name):
     from tapecoil.app.sweep import load_sweep

@@ -368,9 +368,13 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
         ax.axhline(1.0, color="k", lw=0.8)
         ax.set(xlabel=key, ylabel="computed / reference", title=f"sweep: {sweep.study}")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    if sweep.study == "wrapping":  # its points fill the plot: the legend goes below it
+        fig.set_size_inches(7.5, 6.0)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2)
+    else:
+        ax.legend(fontsize=7)
     fig.tight_layout()
     path = directory / "sweep.png"
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path

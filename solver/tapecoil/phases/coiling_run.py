@@ -77,7 +77,10 @@ class CoilingRun(SteppedRun):
         self.rows.last_potential = state["last_potential"]
         self._restore_history(state)
 
-    def _continuation(self, set_load, control, predict=None):
+    def continuation(self, set_load, control, predict=None) -> Continuation:
+        """A load stepping of this run's solver: ``set_load(t)`` applies the load t; cut-backs and
+        pseudo-transient relaxation through snaps as in the coiling (for another load, e.g. an
+        end's displacement, on the same model)."""
         m = self.m
         relax = Relaxation(
             m.viscosity,
@@ -99,7 +102,7 @@ class CoilingRun(SteppedRun):
         m = self.m
         steps = m.config.coiling.flatten_steps
         control = m.config.solver.control(initial_step=1.0 / steps, max_step=1.0 / steps, min_step=1e-6)
-        cont = self._continuation(m.set_flattening, control)
+        cont = self.continuation(m.set_flattening, control)
         cont.on_step = lambda step: self._record(self.rows.row("flatten", step.load, step))
         cont.run(0.0, 1.0)
 
@@ -135,7 +138,7 @@ class CoilingRun(SteppedRun):
             self._check_stop(m.comm)
 
         m.update(start_angle)
-        cont = self._continuation(m.set_hub_angle, control, predict=m.predict)
+        cont = self.continuation(m.set_hub_angle, control, predict=m.predict)
         cont.on_step = converged
         cont.run(start_angle, final_angle, stops, first_step=first_step)
 

@@ -53,6 +53,7 @@ class WrapStudy:
         wrap_angle: hub rotation that wraps the tape [deg]; past ``conform_angle`` by the
             lift-off's span.
         free_length: tape beyond the wrapped length r_c wrap_angle [m].
+        wrap_step: the largest hub-angle step of the wrap [rad].
         wrap_pull: the pull while the hub turns, as a fraction of Eq. 2.9 at the mid-surface
             radius [-], or ``bending_margin`` times Eq. 2.6 if that is more (with ``min_pull``
             [N] as a floor).
@@ -72,6 +73,7 @@ class WrapStudy:
 
     wrap_angle: float = 340.0
     free_length: float = 0.1
+    wrap_step: float = 0.2
     wrap_pull: float = 0.5
     bending_margin: float = 1.3
     min_pull: float = 0.2
@@ -161,7 +163,7 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
     )
     t0 = time.perf_counter()
     model = CoilingModel(case, comm)
-    run = CoilingRun(model, max_step=0.2)
+    run = CoilingRun(model, max_step=study.wrap_step)
     history: list[dict] = []
 
     def measure(phase: str, d: float, iterations: int) -> dict:
@@ -203,7 +205,7 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
             if row["folds"] > most["folds"]:
                 most, fold_state = row, model.model.q.x.array.copy()
 
-        cont = run._continuation(end.set, control)
+        cont = run.continuation(end.set, control)
         cont.on_step = released
         start = -study.release
         try:
@@ -223,7 +225,7 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
             max_step=study.max_step * study.release / span,
             min_step=1e-7,
         )
-        cont = run._continuation(end.set, control)
+        cont = run.continuation(end.set, control)
         cont.on_step = pulled
         try:
             cont.run(start, study.overpull)
