@@ -87,7 +87,15 @@ class WrapStudy:
 
     def check(self) -> None:
         """Refuse options that cannot give a reading, naming the key (``sweep.wrapping.*``)."""
-        bad = []
+        bad = [
+            f"{f.name} = {getattr(self, f.name)!r}: must be a number"
+            for f in dataclasses.fields(self)
+            if isinstance(getattr(self, f.name), bool) or not isinstance(getattr(self, f.name), int | float)
+        ]
+        if bad:
+            from tapecoil.config import ConfigError
+
+            raise ConfigError("sweep.wrapping: " + "; ".join(bad))
         if not 0 < self.conform_angle < self.wrap_angle <= 720:
             bad.append("conform_angle and wrap_angle: need 0 < conform_angle < wrap_angle <= 720 deg")
         for key in (
