@@ -98,9 +98,9 @@ def coiled():
     controls = []
 
     class Recorded(CoilingRun):
-        def _continuation(self, set_load, control, predict=None):
+        def continuation(self, set_load, control, predict=None):
             controls.append(("coiling", control))
-            return super()._continuation(set_load, control, predict)
+            return super().continuation(set_load, control, predict)
 
     model = CoilingModel(cfg, MPI.COMM_WORLD)
     run = Recorded(model)
