@@ -27,7 +27,8 @@ def write_wrapping_case(
     """
     directory = prepare_directory(directory, config, comm)
     result = wrapping_tension(config, comm, study)
-    history, model, fold_state = result.pop("history"), result.pop("model"), result.pop("fold_state")
+    history, model = result.pop("history"), result.pop("model")
+    fold_state, fold_state_at = result.pop("fold_state"), result.pop("fold_state_at")
     rows = [
         {k: ";".join(f"{x:.6g}" for x in v) if isinstance(v, list) else v for k, v in row.items()}
         for row in history
@@ -53,8 +54,8 @@ def write_wrapping_case(
                 model.frame.axis_point,
                 model.config,
                 directory / "figures" / "folds.png",
-                f"r_c/R = {result['ratio']:.3g}: {result['max_folds']} fold(s), end let back "
-                f"{-1e3 * result['max_folds_at']:.2g} mm",
+                f"r_c/R = {result['ratio']:.3g}: the most folds of the release, end let back "
+                f"{-1e3 * fold_state_at:.2g} mm",
             )
         except Exception as err:  # a picture is not worth the case: say why it is missing
             LOG.warning("wrapping: the folds' picture was not drawn (%s)", err)

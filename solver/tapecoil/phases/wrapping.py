@@ -14,10 +14,10 @@ Wilson et al. seed two folds with temporary cylinders. Here the folds come from 
 2. **Release.** The hub stops; the free end's displacement along the guide becomes the control
    and is let back towards the hub by ``release``. The wrapped tape gives up what it no longer
    holds: on a hub larger than the tape's own radius it forms localised folds off the cylinder
-   (thesis Fig. 2.5b), on a smaller one it peels off.
+   (thesis Fig. 2.5b); on a smaller one the whole coil loosens off the hub.
 3. **Pull.** The end is pulled again until the centre line conforms over ``conform_angle``:
-   the folds shrink, merge and vanish, or the peeled tape wraps back on. The force then is the
-   required tension.
+   the folds shrink, merge and vanish, or the loosened coil closes on the hub. The force then is
+   the required tension.
 
 The end's displacement is prescribed on every node of the end (its section keeps the shape it
 had at the release), and the force is the reaction there, the internal force along the guide.
@@ -193,7 +193,7 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
         history.append(row)
         return row
 
-    message, required, fold_state = "", None, None
+    message, required, fold_state, fold_state_at = "", None, None, None
     try:
         run.flatten()
         run.coil(wrap)
@@ -208,10 +208,10 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
         most = {"folds": -1}
 
         def released(step):
-            nonlocal most, fold_state
+            nonlocal most, fold_state, fold_state_at
             row = measure("release", step.load, step.iterations)
             if row["folds"] > most["folds"]:
-                most, fold_state = row, model.model.q.x.array.copy()
+                most, fold_state, fold_state_at = row, model.model.q.x.array.copy(), step.load
 
         cont = run.continuation(end.set, control)
         cont.on_step = released
@@ -277,5 +277,6 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
         "wall_time": time.perf_counter() - t0,
         "history": history,
         "fold_state": fold_state,
+        "fold_state_at": fold_state_at,
         "model": model,
     }
