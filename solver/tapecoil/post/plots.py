@@ -407,13 +407,13 @@ def draw_regime_laws(ax, config, ratio_range: tuple[float, float]) -> None:
 def force_extension(history: list[dict], required: float | None, conform_angle: float, path: Path) -> Path:
     """The wrapping study's force against the end's displacement, with the conforming wrap."""
     fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7.0, 6.0), sharex=True)
-    for phase, style in (("release", "-"), ("pull", "-")):
+    for phase in ("release", "pull"):
         rows = [r for r in history if r["phase"] == phase]
         if not rows:
             continue
         d = [1e3 * r["end_displacement"] for r in rows]
-        ax.plot(d, [r["force"] for r in rows], style, marker=".", label=phase)
-        ax2.plot(d, [r["conforming_wrap_deg"] for r in rows], style, marker=".", label=phase)
+        ax.plot(d, [r["force"] for r in rows], marker=".", label=phase)
+        ax2.plot(d, [r["conforming_wrap_deg"] for r in rows], marker=".", label=phase)
         folds = [r["folds"] for r in rows]
         ax2.scatter(d, [r["conforming_wrap_deg"] for r in rows], c=folds, s=12, cmap="viridis", zorder=3)
     if required is not None:
