@@ -180,6 +180,8 @@ def test_wrapping_options_are_checked_before_computing():
         WrapStudy(wrap_angle=300.0).check()
     with pytest.raises(ConfigError, match=r"release = -0\.001"):
         WrapStudy(release=-0.001).check()
+    with pytest.raises(ConfigError, match=r"wrap_step = 0\.0: must be positive"):
+        WrapStudy(wrap_step=0.0).check()
     with pytest.raises(ConfigError, match=r"tolerance = '3h': must be a number"):
         WrapStudy(tolerance="3h").check()
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from mpi4py import MPI
 
 from tapecoil import theory
-from tapecoil.config import Config
+from tapecoil.config import Config, ConfigError
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import FREE_END
@@ -92,14 +92,13 @@ class WrapStudy:
             for f in dataclasses.fields(self)
             if isinstance(getattr(self, f.name), bool) or not isinstance(getattr(self, f.name), int | float)
         ]
-        if bad:
-            from tapecoil.config import ConfigError
-
+        if bad:  # the ranges below cannot be compared
             raise ConfigError("sweep.wrapping: " + "; ".join(bad))
         if not 0 < self.conform_angle < self.wrap_angle <= 720:
             bad.append("conform_angle and wrap_angle: need 0 < conform_angle < wrap_angle <= 720 deg")
         for key in (
             "free_length",
+            "wrap_step",
             "wrap_pull",
             "bending_margin",
             "release",
@@ -115,8 +114,6 @@ class WrapStudy:
         if self.elements_across < 2:
             bad.append(f"elements_across = {self.elements_across!r}: at least 2")
         if bad:
-            from tapecoil.config import ConfigError
-
             raise ConfigError("sweep.wrapping: " + "; ".join(bad))
 
 
@@ -125,7 +122,6 @@ class EndDisplacement:
     ``u_x0`` (per node, at the moment of the switch) plus ``d``."""
 
     def __init__(self, model: CoilingModel):
-        self.model = model
         self.value, self.bc = facet_condition(model.model, (0, 0), model.strip.facet_tags.find(FREE_END))
         self.start = model.model.q.sub(0).sub(0).collapse().x.array.copy()
         self.value.x.array[:] = self.start
@@ -205,13 +201,14 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
         control = model.config.solver.control(
             initial_step=study.max_step, max_step=study.max_step, min_step=1e-7
         )
-        most = {"folds": -1}
+        release_folds = -1  # the most folds seen in the release: its state is pictured
 
         def released(step):
-            nonlocal most, fold_state, fold_state_at
+            nonlocal release_folds, fold_state, fold_state_at
             row = measure("release", step.load, step.iterations)
-            if row["folds"] > most["folds"]:
-                most, fold_state, fold_state_at = row, model.model.q.x.array.copy(), step.load
+            if row["folds"] > release_folds:
+                release_folds = row["folds"]
+                fold_state, fold_state_at = model.model.q.x.array.copy(), step.load
 
         cont = run.continuation(end.set, control)
         cont.on_step = released
