@@ -292,3 +292,29 @@ def test_two_ranks_assemble_the_contact_as_one():
     serial = _folded_energy_and_force(MPI.COMM_SELF)
     assert parallel[0] > 0
     assert parallel == pytest.approx(serial, rel=1e-10)
+
+
+def test_a_flat_strip_does_not_touch_itself():
+    """A flat strip of long, narrow cells: a node beside a cell of its own section, just beyond
+    the exclusion and in the cell's plane, is not over that cell and touches nothing (it was
+    once taken for a node sunk a whole thickness into it, and the coarse benchmark with 8
+    elements across could not be flattened)."""
+    from tapecoil.contact.self_contact import SelfContact
+    from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
+    from tapecoil.geometry.surfaces import StripGeometry
+    from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
+
+    L, b, h, E = 0.2, 0.02, 1e-4, 130e9
+    # cells 25 mm along and 2.5 mm across: a node one cell beside a cell lies well within the
+    # cell's bounding sphere, so the search offers the pair
+    strip = create_strip_mesh(MPI.COMM_WORLD, StripGeometry(math.inf, b, L), MeshResolution(8, 8))
+    model = NaghdiShell(strip, ShellMaterial(E, 0.3, h))
+    nodes = Nodes(model)
+    buffer = 2 * h
+    contact = SelfContact(model, nodes, h, 1e12, 0.05 * h, buffer, exclusion=4 * (h + buffer))
+    search = contact.new_search()
+    offered, _ = search.candidates(contact.positions(model.q.x.array), contact.owned)
+    assert MPI.COMM_WORLD.allreduce(offered.size) > 0
+    pairs = contact.pairs(model.q.x.array, search)
+    assert MPI.COMM_WORLD.allreduce(pairs.node.size) == 0
+    assert contact.energy(pairs) == 0.0

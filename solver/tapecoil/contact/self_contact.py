@@ -13,12 +13,13 @@ beneath and off the turn above, and any part of the surface off any other. The g
 n_s the partner's smoothed normal (its shape functions times the nodes' mean normals: the Q2
 surface is only C0, and a node over an edge between two cells must be pushed the same way by
 either), counted on the node's side so that a node pushed through its partner has g < -h and is
-pushed back. Beyond a free edge of the partner its face counts as extended by h (turns of one
-width lie edge over edge). The penalty energy is w_A k/2 <-g>^2 (w_A the node's share of the
-reference area, k the stiffness per unit area, <.> the bracket smoothed over a width delta as
-in the hub contact: delta softplus(-g / delta)). Its force, dE/dg along B = side n_s (x)
-(1, -N_1, ..., -N_9), acts on A and, through the shape functions N_b(y), on the nodes of the
-partner cell: equal and opposite, since sum_b N_b = 1.
+pushed back. A node whose closest point lies on an edge of the partner counts as over it up to
+h beside that edge: beyond a free edge the face is extended by h (turns of one width lie edge
+over edge), beside an inner edge the node lies over the next cell. The penalty energy is
+w_A k/2 <-g>^2 (w_A the node's share of the reference area, k the stiffness per unit area, <.>
+the bracket smoothed over a width delta as in the hub contact: delta softplus(-g / delta)). Its
+force, dE/dg along B = side n_s (x) (1, -N_1, ..., -N_9), acts on A and, through the shape
+functions N_b(y), on the nodes of the partner cell: equal and opposite, since sum_b N_b = 1.
 Both faces' nodes are contact points (two-pass), so the pressure between two layers is the sum
 of both passes. A node keeps its partner cell on a side while its closest point stays inside
 it: of two nearly equally close cells (a node over the edge between them) the closer by
@@ -93,35 +94,9 @@ class ContactPairs:
     energy: float
 
 
-# the nodes of each edge of basix's Q2 quadrilateral: r_1 = 0, r_1 = 1, r_2 = 0, r_2 = 1
-Q2_EDGES = ((0, 2, 5), (1, 3, 6), (0, 1, 4), (2, 3, 7))
-
-
-def free_edges(cells: np.ndarray) -> np.ndarray:
-    """(Nc, 4) flags: which edges of each Q2 cell (in :data:`Q2_EDGES` order) bound the surface."""
-    keys = np.stack([np.sort(cells[:, list(e)], axis=1) for e in Q2_EDGES], axis=1)  # (Nc, 4, 3)
-    flat = keys.reshape(-1, 3)
-    _, inverse, counts = np.unique(flat, axis=0, return_inverse=True, return_counts=True)
-    return (counts[inverse.ravel()] == 1).reshape(-1, 4)
-
-
 def inside_cell(ref: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
     """Whether reference points (n, 2) lie strictly inside their cells (off every edge)."""
     return np.all((ref > tolerance) & (ref < 1 - tolerance), axis=1)
-
-
-def on_free_edge(ref: np.ndarray, free: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
-    """Whether reference points (n, 2) lie on a free edge of their cells (``free`` (n, 4))."""
-    at = np.stack(
-        [
-            ref[:, 0] <= tolerance,
-            ref[:, 0] >= 1 - tolerance,
-            ref[:, 1] <= tolerance,
-            ref[:, 1] >= 1 - tolerance,
-        ],
-        axis=1,
-    )
-    return np.any(at & free, axis=1)
 
 
 class GatheredSurface:
@@ -219,7 +194,6 @@ class SelfContact:
         self.u_dofs, self.weights, self.cells = surface.u_dofs, surface.weights, surface.cells
         self.buffer, self.exclusion, self.side_hint = buffer, exclusion, side_hint
         self.reach = thickness + self.cutoff
-        self.free_edges = free_edges(self.cells)
         self.normal_field = NodalNormals(self.cells)
         self.timings = {
             "gather": 0.0,
@@ -303,17 +277,21 @@ class SelfContact:
         # across an edge between two cells the cells' own normals jump, and a node over that
         # edge would be pushed one way or the other by whichever cell is the closer by
         # round-off), on the side the node was on at the converged state, so that a node that
-        # has gone through the partner has a gap below -h and is pushed back. Beyond the
-        # partner's free edge the partner's face is taken as extended by h (turns of the same
-        # width lie edge over edge, and their edges must not pass each other); farther beside
-        # it the node is not over the partner
+        # has gone through the partner has a gap below -h and is pushed back. A node whose
+        # closest point lies on an edge of the partner is over it only as far as h beside that
+        # edge: beyond a free edge the face is taken as extended by h (turns of the same width
+        # lie edge over edge, and their edges must not pass each other); beside an inner edge
+        # the node lies over the cell next to it, which is its partner if it is not the node's
+        # own neighbourhood. Counted along the normal alone, a node beside a cell of its own
+        # section (just beyond the exclusion, in the plane of a flattened section) would be
+        # taken for a node that has sunk a whole thickness into it
         r = x[node] - found["y"]
         nodal, normal_data = self.normal_field.normals(x)
         smooth = np.matmul(found["N"][:, None, :], nodal[self.cells[cell]])[:, 0]
         smooth /= np.linalg.norm(smooth, axis=1)[:, None]
         normal_distance = np.einsum("pi,pi->p", r, smooth)
         beside = np.linalg.norm(r - normal_distance[:, None] * smooth, axis=1)
-        over = ~on_free_edge(found["ref"], self.free_edges[cell]) | (beside <= self.h)
+        over = inside_cell(found["ref"]) | (beside <= self.h)
         gap = side * normal_distance - self.h
         keep = over & (gap < self.cutoff)
         node, cell, gap, side = node[keep], cell[keep], gap[keep], side[keep]
