@@ -243,6 +243,55 @@ def test_a_failed_relaxation_cuts_the_step_back_and_relaxes_again():
     assert state.x.array[0] == pytest.approx(0.5)
 
 
+def test_steps_creeping_towards_a_snap_relax_through_it():
+    """Near a snap's turning point every step converges only at half the length of the one
+    before (it is cut back once, then passes): after ``max_cutbacks`` cut-backs since the last
+    clean step the failing step relaxes through the snap instead of creeping on.
+
+    The model: a plain solve converges on the first branch for t < 0.57 or, once there, on the
+    second (x = 1 + t); a relaxed solve falls onto the second from loads up to 0.6.
+    """
+    from types import SimpleNamespace
+
+    from tapecoil.config import StepControl
+    from tapecoil.core.stepping import Continuation, Relaxation
+
+    space = SimpleNamespace(
+        dofmap=SimpleNamespace(index_map=SimpleNamespace(size_local=1), index_map_bs=1),
+        mesh=SimpleNamespace(comm=MPI.COMM_SELF),
+    )
+    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)), function_space=space)
+    load = {"t": 0.0}
+    relaxation = Relaxation(
+        SimpleNamespace(value=0.0),
+        SimpleNamespace(x=SimpleNamespace(array=np.zeros(1))),
+        1.0,
+        max_iterations=5,
+    )
+
+    def solve():
+        t, x = load["t"], state.x.array
+        relaxing = relaxation.coefficient.value > 0
+        ok = t <= 0.6 if relaxing else (t < 0.57 or x[0] >= 1.0)
+        if ok:
+            x[:] = t if (t < 0.57 and x[0] < 1.0 and not relaxing) else 1.0 + t
+        else:
+            x[:] = np.nan
+        return SimpleNamespace(converged=ok, iterations=9)  # never easy: the steps do not grow
+
+    control = StepControl(
+        initial_step=0.1, max_step=0.1, min_step=1e-9, grow=1.5, cutback=0.5, max_cutbacks=3
+    )
+    run = Continuation(solve, lambda t: load.update(t=t), state, control, relaxation=relaxation)
+    history = run.run(0.0, 1.0)
+    loads = [round(r.load, 6) for r in history]
+    # 0.6 fails, 0.55 passes (1 cut-back); 0.6 and 0.575 fail, 0.5625 passes (3); 0.575 fails
+    # again: 4 cut-backs since the last clean step, so it relaxes there
+    assert loads[:8] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.55, 0.5625, 0.575]
+    assert [r.relaxed for r in history[:8]] == [False] * 7 + [True]
+    assert history[-1].load == pytest.approx(1.0) and state.x.array[0] == pytest.approx(2.0)
+
+
 def test_error_controlled_steps_meet_their_tolerance():
     """With an error estimate, steps whose error exceeds the tolerance are repeated shorter,
     and the accepted ones settle where the error is just below it.

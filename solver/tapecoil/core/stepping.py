@@ -4,12 +4,15 @@ The load parameter t runs from t_start to t_end. After an easy step (few Newton 
 the step grows; after a failed one the state returns to the last converged one and the step is
 cut back. A step that still fails after ``max_cutbacks`` consecutive cut-backs, or at the
 smallest allowed step, is retried with pseudo-transient relaxation when the caller provides
-one: a viscous term c (q - q_prev) is added and a sequence of pseudo-time solves at the fixed
-target load lets the state fall through the instability (a snap) to the next stable branch,
-where a plain Newton solve finishes. If that fails too, the step is cut back again and
-retried (Newton, then relaxation) while it is at least the smallest allowed step: from nearer
-the snap's turning point the relaxation has less far to fall. Below that the run stops with
-:class:`ContinuationError`; the state is then the last converged one.
+one. So is a failing step when the steps have been cut back ``max_cutbacks`` times since one
+last converged without a cut-back: near a snap's turning point each step converges only at
+half the length of the one before, and the loads would creep towards the turning point
+without ever passing it. Relaxation: a viscous term c (q - q_prev) is added and a sequence
+of pseudo-time solves at the fixed target load lets the state fall through the instability (a
+snap) to the next stable branch, where a plain Newton solve finishes. If that fails too, the
+step is cut back again and retried (Newton, then relaxation) while it is at least the
+smallest allowed step: from nearer the snap's turning point the relaxation has less far to
+fall. Below that the run stops with :class:`ContinuationError`; the state is then the last converged one.
 
 With an ``error`` estimate (time stepping), a converged step is also judged on its accuracy:
 ``error()`` returns the step's estimated local error over what the caller tolerates (1 is the
@@ -149,6 +152,8 @@ class Continuation:
         dt = ctl.initial_step * span if first_step is None else first_step
         saved = self.state.x.array.copy()
         cutbacks = rejected = 0
+        # cut-backs of the steps accepted since the last one that needed none
+        limping = 0
         while marks:
             target = t + dt
             if (target - marks[0]) * math.copysign(1, span) >= -1e-12 * abs(span):
@@ -163,7 +168,8 @@ class Continuation:
                 self.state.x.array[:] = saved
                 cutbacks += 1
                 dt *= ctl.cutback
-                if cutbacks <= ctl.max_cutbacks and abs(dt) >= ctl.min_step * abs(span):
+                creeping = self.relaxation is not None and limping + cutbacks > ctl.max_cutbacks
+                if cutbacks <= ctl.max_cutbacks and abs(dt) >= ctl.min_step * abs(span) and not creeping:
                     continue
                 if self.relaxation is None:
                     self.set_load(t)
@@ -213,6 +219,7 @@ class Continuation:
                 target, step, iterations, cutbacks, relaxed, time.perf_counter() - t0, dt, error, rejected
             )
             self.history.append(record)
+            limping = 0 if (cutbacks == 0 or relaxed) else limping + cutbacks
             cutbacks = rejected = 0
             if self.on_step is not None:
                 self.on_step(record)
