@@ -185,6 +185,27 @@ def test_continuation_stops_with_the_last_converged_state():
     assert [round(s.load, 6) for s in run.history] == [0.2, 0.4, 0.5]
 
 
+def one_dof_with_relaxation():
+    """A state of one dof (with the function space the relaxation's norm asks for) and a
+    relaxation of it, for the continuation's tests."""
+    from types import SimpleNamespace
+
+    from tapecoil.core.stepping import Relaxation
+
+    space = SimpleNamespace(
+        dofmap=SimpleNamespace(index_map=SimpleNamespace(size_local=1), index_map_bs=1),
+        mesh=SimpleNamespace(comm=MPI.COMM_SELF),
+    )
+    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)), function_space=space)
+    relaxation = Relaxation(
+        SimpleNamespace(value=0.0),
+        SimpleNamespace(x=SimpleNamespace(array=np.zeros(1))),
+        1.0,
+        max_iterations=5,
+    )
+    return state, relaxation
+
+
 def test_a_failed_relaxation_cuts_the_step_back_and_relaxes_again():
     """A snap at load 0.5 that the relaxation passes only from within 0.02 of it: after the
     relaxation fails from the first cut-back's step, a shorter step relaxes through.
@@ -196,20 +217,10 @@ def test_a_failed_relaxation_cuts_the_step_back_and_relaxes_again():
     from types import SimpleNamespace
 
     from tapecoil.config import StepControl
-    from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation
+    from tapecoil.core.stepping import Continuation, ContinuationError
 
-    space = SimpleNamespace(
-        dofmap=SimpleNamespace(index_map=SimpleNamespace(size_local=1), index_map_bs=1),
-        mesh=SimpleNamespace(comm=MPI.COMM_SELF),
-    )
-    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)), function_space=space)
+    state, relaxation = one_dof_with_relaxation()
     load = {"t": 0.0}
-    relaxation = Relaxation(
-        SimpleNamespace(value=0.0),
-        SimpleNamespace(x=SimpleNamespace(array=np.zeros(1))),
-        1.0,
-        max_iterations=5,
-    )
 
     def solve():
         t, x = load["t"], state.x.array
@@ -254,20 +265,10 @@ def test_steps_creeping_towards_a_snap_relax_through_it():
     from types import SimpleNamespace
 
     from tapecoil.config import StepControl
-    from tapecoil.core.stepping import Continuation, Relaxation
+    from tapecoil.core.stepping import Continuation
 
-    space = SimpleNamespace(
-        dofmap=SimpleNamespace(index_map=SimpleNamespace(size_local=1), index_map_bs=1),
-        mesh=SimpleNamespace(comm=MPI.COMM_SELF),
-    )
-    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)), function_space=space)
+    state, relaxation = one_dof_with_relaxation()
     load = {"t": 0.0}
-    relaxation = Relaxation(
-        SimpleNamespace(value=0.0),
-        SimpleNamespace(x=SimpleNamespace(array=np.zeros(1))),
-        1.0,
-        max_iterations=5,
-    )
 
     def solve():
         t, x = load["t"], state.x.array
