@@ -121,6 +121,7 @@ def test_benchmark_coils_on_its_own_turns():
     (independent of the contact code) at least 0.6 h at every step (the spiral run's: 0.46 h).
     Measured (2 ranks, 12.5 min): energy -2.8 %, outer radius +0.72 %, turn separation 1.001 h,
     closest turns 0.73 h, hub torque's two readings 0.26 % apart."""
+    from tapecoil.app import results
     from tapecoil.config import load_config
     from tapecoil.measures.separation import separation_measure
     from tapecoil.phases.coiling_run import run_coiling
@@ -131,7 +132,8 @@ def test_benchmark_coils_on_its_own_turns():
         mesh=dataclasses.replace(config.mesh, preset="coarse"),
         contact=dataclasses.replace(config.contact, turns="surface"),
     )
-    directory = "results/validate-coil-surface-coarse"
+    # with its config.toml, from which the separation measure places the hub, as a run's
+    directory = results.prepare_directory("results/validate-coil-surface-coarse", config, MPI.COMM_WORLD)
     summary, _ = run_coiling(config, directory, MPI.COMM_WORLD, progress=False)
     assert_coiled_to_36_rad(summary)
     assert summary["measures"]["hub_torque"]["error"] < 0.03
