@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
+from tapecoil.core.collective import raise_everywhere
 from tapecoil.measures.quad9 import (
     BERNSTEIN_9,
     NEWTON_ITERATIONS,
@@ -341,30 +342,41 @@ def separation_measure(directory: str | Path, phase: str, comm=None) -> dict | N
     the contact that keeps the turns apart. Reported without a tolerance: with the default
     ``contact.turns = "spiral"`` the turns rest on a prescribed obstacle and this is what that
     obstacle lets them do. Computed on rank 0, where the snapshots are; every rank gets it
-    (collective when ``comm`` is given). None when the phase wrote no snapshots.
+    (collective when ``comm`` is given; an error there is raised on every rank). None when the
+    phase wrote no snapshots.
     """
+    entry, error = None, None
+    if comm is None or comm.rank == 0:
+        try:
+            entry = _separation_entry(directory, phase)
+        except Exception as err:  # raised on every rank: the others wait in the broadcast
+            error = err
+    raise_everywhere(comm, error)
+    return entry if comm is None else comm.bcast(entry, root=0)
+
+
+def _separation_entry(directory: str | Path, phase: str) -> dict | None:
+    """:func:`separation_measure`'s entry, on the rank that holds the snapshots."""
     from tapecoil.measures.measure import Measure
 
-    entry = None
-    if comm is None or comm.rank == 0:
-        files, _ = snapshot_files(directory, phase)
-        if files:
-            history = separation_history(directory, phase)
-            found = history.index is not None
-            first = history.percentiles.get(1.0)
-            entry = Measure(
-                "smallest separation of distinct turns / h, from the snapshots [-]",
-                history.global_minimum if found else None,
-                1.0,
-                None,
-                "turns one thickness apart (physics brief Sec. 2): mid-surfaces h apart",
-                extra={
-                    "at": history.t_min if found else None,
-                    "at_unit": "rad" if phase == "coiling" else "s",
-                    "snapshots": len(history.files),
-                    "lowest_1_percent": float(np.nanmin(first)) if found and first is not None else None,
-                    "quantity": "radial distance between the mid-surfaces of turns lying over each other"
-                    + ("" if found else " (no two turns lie over each other)"),
-                },
-            ).to_dict()
-    return entry if comm is None else comm.bcast(entry, root=0)
+    files, _ = snapshot_files(directory, phase)
+    if not files:
+        return None
+    history = separation_history(directory, phase)
+    found = history.index is not None
+    first = history.percentiles.get(1.0)
+    return Measure(
+        "smallest separation of distinct turns / h, from the snapshots [-]",
+        history.global_minimum if found else None,
+        1.0,
+        None,
+        "turns one thickness apart (physics brief Sec. 2): mid-surfaces h apart",
+        extra={
+            "at": history.t_min if found else None,
+            "at_unit": "rad" if phase == "coiling" else "s",
+            "snapshots": len(history.files),
+            "lowest_1_percent": float(np.nanmin(first)) if found and first is not None else None,
+            "quantity": "radial distance between the mid-surfaces of turns lying over each other"
+            + ("" if found else " (no two turns lie over each other)"),
+        },
+    ).to_dict()
