@@ -318,3 +318,44 @@ def test_a_flat_strip_does_not_touch_itself():
     pairs = contact.pairs(model.q.x.array, search)
     assert MPI.COMM_WORLD.allreduce(pairs.node.size) == 0
     assert contact.energy(pairs) == 0.0
+
+
+def test_the_matrix_pattern_is_renewed_when_old_pairs_outnumber_the_live_ones(folded):
+    """The couplings of pairs that have come apart leave the matrix once they outnumber those
+    of the live pairs (counted here from the pairs themselves, over both ranks): the upper
+    layer slid by two cells, so that every node has a new partner, twice more. No renewal
+    while nothing has converged in between, nor while the pattern holds only live pairs."""
+    from tapecoil.contact.term import SelfContactTerm
+
+    model, nodes, contact, _, _, _ = folded
+    comm = MPI.COMM_WORLD
+    q0 = model.q.x.array.copy()
+    term = SelfContactTerm(contact, model.q, [])
+    assert term.begin() is False
+    held, live = set(), set()
+
+    def jacobian():
+        nonlocal live
+        pairs = term.current()
+        live = set(zip(pairs.node.tolist(), pairs.cell.tolist(), strict=True))
+        held.update(live)
+        contact_matrix(model, term).destroy()
+
+    jacobian()
+    assert term.begin() is False  # a retry from the same converged state
+    upper = nodes.reference[0] > 0.1
+    renewed = []
+    for shift in (0.01, 0.02, 0.03):
+        model.q.x.array[nodes.u_dofs[upper, 0]] = q0[nodes.u_dofs[upper, 0]] + shift
+        model.q.x.scatter_forward()
+        contact.accept(model.q.x.array)
+        stale, alive = comm.allreduce(np.array([len(held - live), len(live)]), op=MPI.SUM)
+        renewed.append(term.begin())
+        assert renewed[-1] is bool(stale > alive)
+        if renewed[-1]:
+            held.clear()
+        jacobian()
+    model.q.x.array[:] = q0
+    model.q.x.scatter_forward()
+    contact.accept(q0)
+    assert renewed == [False, True, False] and term.pattern_renewals == 1

@@ -78,7 +78,9 @@ class SNESSolver:
         # assembled terms beyond the forms (contact between distant parts of the mesh): objects
         # with add_residual(b) and add_jacobian(A), called with the state in place, after the
         # forms and before the Dirichlet rows are set; add_jacobian returns True when it has
-        # widened A's nonzero pattern; begin() is called before every solve. A term with
+        # widened A's nonzero pattern; begin() is called before every solve and returns True
+        # when A should start again from the forms' pattern (the term's couplings have moved
+        # on: a pattern that only grows makes every factorisation dearer). A term with
         # apply_coupling(x, y) (y += K x) applies that part K of its Jacobian instead of
         # assembling it: Newton's operator is then A + K (:class:`JacobianOperator`), which
         # the factorised A preconditions in a Krylov solve
@@ -146,6 +148,15 @@ class SNESSolver:
             self.snes.getKSP().getPC().reset()
         self.timings["jacobian"] += time.perf_counter() - t0
 
+    def _renew_matrix(self) -> None:
+        """Replace A by a matrix of the forms' nonzero pattern alone (collective); the terms
+        widen it again with the couplings they have now."""
+        old = self.A
+        self.A = dolfinx.fem.petsc.create_matrix(self.J_form)
+        self.snes.setJacobian(self._jacobian, self.A if self._operator is None else self._operator, self.A)
+        self.snes.getKSP().getPC().reset()
+        old.destroy()
+
     def _use_operator(self) -> None:
         if self._operator is None and any(hasattr(term, "apply_coupling") for term in self.terms):
             J = PETSc.Mat().createPython(self.A.getSizes(), JacobianOperator(self), comm=self.A.getComm())
@@ -157,8 +168,8 @@ class SNESSolver:
         """Solve from the current state ``q``; on failure ``q`` holds the last iterate."""
         self._use_operator()
         self.norms.clear()
-        for term in self.terms:
-            term.begin()
+        if any([term.begin() for term in self.terms]):  # a list: every term's begin() runs
+            self._renew_matrix()
         self.q.x.petsc_vec.copy(self.x)
         t0 = time.perf_counter()
         with options_in_database(self.prefix, self.options):
