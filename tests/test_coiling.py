@@ -386,36 +386,3 @@ def test_hub_torque_from_the_reactions_matches_the_energy_balance(coiled_short):
     measure = hub_torque_measure(history)
     assert measure is not None and measure["work_energy_balance_J"] > 0
     assert measure["passed"], measure
-
-
-def test_checkpoint_carries_the_contact_multipliers(tmp_path):
-    """contact.augmented: the multipliers of the turns' contact go into the checkpoint and come
-    back to the same nodes and sides (any values; a round trip, written and read on this
-    communicator), and the restored contact's energy at the state is the one written."""
-    from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
-
-    cfg = short_tape()
-    cfg = dataclasses.replace(cfg, contact=dataclasses.replace(cfg.contact, turns="surface", augmented=True))
-    model = CoilingModel(cfg, MPI.COMM_WORLD)
-    sc = model.tape.turns.self_contact
-    rng = np.random.default_rng(7)
-    values = rng.uniform(0.0, 0.3 * cfg.tape.h, sc.shift.size)
-    mine = np.zeros(sc.shift.size, dtype=bool)
-    mine[2 * sc.owned], mine[2 * sc.owned + 1] = True, True
-    sc.shift[:] = np.where(mine, values, 0.0)
-    meta = {"hub_angle": 0.0, "tension": 0.0, "completed": False}
-    write_checkpoint(model, tmp_path / "stowed", meta)
-    restored, _ = read_checkpoint(tmp_path / "stowed", cfg, MPI.COMM_WORLD)
-    back = restored.tape.turns.self_contact
-    # the restored mesh may number its nodes otherwise: match them by their reference position
-    key = np.round(sc.reference / cfg.tape.h, 3)
-    order = {tuple(p): i for i, p in enumerate(np.round(back.reference / cfg.tape.h, 3).tolist())}
-    same = np.array([order[tuple(p)] for p in key.tolist()])
-    theirs = np.zeros(back.shift.size, dtype=bool)
-    theirs[2 * back.owned], theirs[2 * back.owned + 1] = True, True
-    # each node is owned by one rank: the sums over the ranks are every node's values
-    written = MPI.COMM_WORLD.allreduce(np.where(mine, sc.shift, 0.0))
-    read = MPI.COMM_WORLD.allreduce(np.where(theirs, back.shift, 0.0))
-    for side in (0, 1):
-        assert np.abs(read[2 * same + side] - written[side::2]).max() <= 1e-15
-    assert np.abs(written).max() > 0

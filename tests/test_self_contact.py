@@ -359,30 +359,3 @@ def test_the_matrix_pattern_is_renewed_when_old_pairs_outnumber_the_live_ones(fo
     model.q.x.scatter_forward()
     contact.accept(q0)
     assert renewed == [False, True, False] and term.pattern_renewals == 1
-
-
-def test_the_multipliers_carry_the_pressure_without_the_penetration(folded):
-    """Consistency of the augmented Lagrangian's update: after it, the folded strip lifted to
-    touch (its layers' mid-surfaces h apart, no penetration) carries the pressure k 0.1 h that
-    the penalty needed a penetration of 0.1 h for; without the multipliers it carries none."""
-    model, nodes, contact, _, k, h = folded
-
-    q0 = model.q.x.array.copy()
-    pairs = contact.pairs(q0, contact.new_search())
-    contact.update_multipliers(pairs)
-    upper = nodes.reference[0] > 0.1
-    model.q.x.array[nodes.u_dofs[upper, 2]] = q0[nodes.u_dofs[upper, 2]] + 0.1 * h
-    model.q.x.scatter_forward()
-    lifted = contact.pairs(model.q.x.array, contact.new_search())
-    pressure = np.concatenate(MPI.COMM_WORLD.allgather(-lifted.force / contact.weights[lifted.node]))
-    gaps = np.concatenate(MPI.COMM_WORLD.allgather(lifted.gap))
-    contact.shift[:] = 0.0
-    bare = contact.pairs(model.q.x.array, contact.new_search())
-    model.q.x.array[:] = q0
-    model.q.x.scatter_forward()
-    assert pressure.size > 0
-    assert gaps == pytest.approx(np.zeros(gaps.size), abs=1e-9 * h)
-    assert pressure == pytest.approx(np.full(pressure.size, k * 0.1 * h), rel=1e-9)
-    carried = MPI.COMM_WORLD.allreduce(float(np.abs(lifted.force).max(initial=0.0)), op=MPI.MAX)
-    left = MPI.COMM_WORLD.allreduce(float(np.abs(bare.force).max(initial=0.0)), op=MPI.MAX)
-    assert left <= 1e-9 * carried  # the plain bracket at a gap of round-off

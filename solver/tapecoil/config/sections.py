@@ -244,10 +244,6 @@ class ContactConfig:
             thickness h [-], > 0: candidate partners within h (1 + search_margin) are kept, and
             the search is repeated only when a point has moved more than search_margin h / 2
             since the last search.
-        augmented: ('surface') augmented Lagrangian: after every converged step each contact
-            point's pressure becomes its multiplier for the next steps (one Uzawa update per
-            step), so that a steady pressure needs no penetration; without it the penalty
-            leaves the turns p/k inside each other (see the README).
     """
 
     turns: str = param("spiral", "", ("spiral", "surface"))
@@ -256,7 +252,6 @@ class ContactConfig:
     smoothing: float = param(0.05, "-", Range(0.0, 1.0))
     stop_penetration: float = param(1.0, "-", Range(0.0, 100.0, lo_open=True))
     search_margin: float = param(2.0, "-", POSITIVE)
-    augmented: bool = param(False, "")
 
 
 @dataclass

@@ -77,9 +77,7 @@ class ContactPairs:
     ``N`` (P, 9) the shape functions at the closest points;
     ``normal_sensitivity`` (P, 30, 3): the force's derivative with respect to m = N_b n_b;
     ``normal_data``: the state's nodal normals for :meth:`SelfContact.normal_derivatives`; ``energy``:
-    this rank's penalty energy [J]; ``side`` (P,): the node's side of its partner (+1, -1);
-    ``penetration`` (P,): the bracket <shift - g> whose penalty is the force per unit area
-    (m; the multiplier's shift included, see :meth:`SelfContact.update_multipliers`).
+    this rank's penalty energy [J].
     """
 
     node: np.ndarray
@@ -94,8 +92,6 @@ class ContactPairs:
     normal_sensitivity: np.ndarray
     normal_data: dict
     energy: float
-    side: np.ndarray | None = None
-    penetration: np.ndarray | None = None
 
 
 def inside_cell(ref: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
@@ -208,9 +204,6 @@ class SelfContact:
             "coupling": 0.0,
         }
         self._reference_version = 0
-        # the augmented Lagrangian's multipliers, per node and side (node * 2 + (side > 0)), as
-        # the penetration the penalty would need for the same pressure: lambda / k [m]
-        self.shift = np.zeros(2 * self.n_nodes)
         self.accept(model.q.x.array)
 
     def new_search(self) -> CandidateSearch:
@@ -300,16 +293,11 @@ class SelfContact:
         beside = np.linalg.norm(r - normal_distance[:, None] * smooth, axis=1)
         over = inside_cell(found["ref"]) | (beside <= self.h)
         gap = side * normal_distance - self.h
-        # only over the partner's cells: beside its free edge a pair comes and goes as the
-        # node moves across, and a multiplier would make its force come and go with it
-        shift = np.where(inside_cell(found["ref"]), self.shift[node * 2 + (side > 0)], 0.0)
-        keep = over & (gap - shift < self.cutoff)
-        node, cell, gap, side, shift = node[keep], cell[keep], gap[keep], side[keep], shift[keep]
+        keep = over & (gap < self.cutoff)
+        node, cell, gap, side = node[keep], cell[keep], gap[keep], side[keep]
         ref, held, distance = found["ref"][keep], found["held"][keep], found["distance"][keep]
         first = nearest_on_each_side(node, cell, side, distance, inside_cell(ref), memory)
-        node, cell, gap, side, shift, ref, held = (
-            v[first] for v in (node, cell, gap, side, shift, ref, held)
-        )
+        node, cell, gap, side, ref, held = (v[first] for v in (node, cell, gap, side, ref, held))
         N = found["N"][keep][first]
         t2 = time.perf_counter()
         self.timings["search"] += t1 - t0
@@ -319,7 +307,7 @@ class SelfContact:
         d = gap_derivatives(x[node], x[partner], nodal[partner], ref, held, side)
         u_dofs = self.u_dofs if dofs is None else dofs
         pair_dofs = np.concatenate([u_dofs[node], u_dofs[partner].reshape(-1, 27)], axis=1)
-        p, dp, d2p = smoothed_bracket(gap - shift, self.delta)
+        p, dp, d2p = smoothed_bracket(gap, self.delta)
         kw = self.penalty * self.weights[node]
         force, stiffness = kw * p * dp, kw * (dp**2 + p * d2p)
         # the force f B differentiated at fixed nodal normals, and with respect to m = N_b n_b
@@ -340,21 +328,7 @@ class SelfContact:
             normal_sensitivity=sensitivity,
             normal_data=normal_data,
             energy=float(np.sum(0.5 * kw * p**2)),
-            side=side,
-            penetration=p,
         )
-
-    def update_multipliers(self, pairs: ContactPairs) -> None:
-        """Carry each contact point's pressure into the next steps as its multiplier (the
-        augmented Lagrangian, one Uzawa update per converged step; this rank's nodes).
-
-        The force per unit area of a pair is k <shift - g>; the new shift is that bracket, so
-        that the same pressure needs no penetration: under a steady load the next step's gap
-        is 0 where the penalty alone leaves -p/k. Points without a partner lose their shift.
-        The pairs must be those of the converged state, before :meth:`accept`.
-        """
-        self.shift[:] = 0.0
-        self.shift[pairs.node * 2 + (pairs.side > 0)] = pairs.penetration
 
     def normal_derivatives(self, pairs: ContactPairs) -> np.ndarray:
         """dm/dX (P, K, 3, 3) of m = N_b n_b at each pair's closest point, with respect to the

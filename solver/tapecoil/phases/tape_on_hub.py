@@ -88,7 +88,7 @@ class TapeOnHub:
         if cc.turns == "surface":
             buffer = cc.search_margin * tp.h
             self.turns = TurnContact(
-                model, self.contact.nodes, self.frame, tp.h, self.penalty, smoothing, buffer, cc.augmented
+                model, self.contact.nodes, self.frame, tp.h, self.penalty, smoothing, buffer
             )
         # strain + contact energy as forms (the turns' real contact is assembled on its own:
         # add_self_contact_force)
@@ -150,11 +150,10 @@ class TapeOnHub:
         if self.turns is not None:
             self.turns.add_force(force)
 
-    def accept_state(self, update_multipliers: bool = True) -> None:
-        """After a converged step: the turns' real contact reads its sides (and, augmented, its
-        multipliers) from this state."""
+    def accept_state(self) -> None:
+        """After a converged step: the turns' real contact reads its sides from this state."""
         if self.turns is not None:
-            self.turns.accept(update_multipliers)
+            self.turns.accept()
 
     def solver_options(self) -> dict:
         """PETSc options a solver with this tape's contact terms needs (names without prefix)."""
@@ -166,12 +165,8 @@ class TapeOnHub:
 
     # -- checkpoint -------------------------------------------------------------------------
     def checkpoint_functions(self) -> dict:
-        """The functions of this state in a checkpoint: u, theta, the winding angles and the
-        multipliers of the turns' contact."""
-        out = {**state_parts(self.model.q, ""), "winding_angle": self.contact.psi}
-        if self.turns is not None:
-            out.update(self.turns.multiplier_functions())
-        return out
+        """The functions of this state in a checkpoint: u, theta and the winding angles."""
+        return {**state_parts(self.model.q, ""), "winding_angle": self.contact.psi}
 
     def write_checkpoint(self, path: str | Path, meta: dict, extra: dict | None = None) -> None:
         """Mesh, tags, state and winding angles (and a phase's ``extra`` functions) with ``meta``.
@@ -182,11 +177,7 @@ class TapeOnHub:
         """
         functions = {**self.checkpoint_functions(), **(extra or {})}
         res = self.strip.resolution
-        meta = {
-            **meta,
-            "resolution": {"across": res.across, "along": res.along, "grading": res.grading},
-            "functions": sorted(functions),
-        }
+        meta = {**meta, "resolution": {"across": res.across, "along": res.along, "grading": res.grading}}
         tags = {"facets": self.strip.facet_tags, "cells": self.strip.cell_tags}
         checkpoint.write_checkpoint(path, self.strip.mesh, tags, functions, meta, self.comm)
 
@@ -205,11 +196,7 @@ class TapeOnHub:
         parts = checkpoint.empty_state_parts(tape.model.W, "")
         checkpoint.read_functions(path, {**parts, "winding_angle": tape.contact.psi})
         checkpoint.set_state(tape.model.q, parts, "")
-        tape.accept_state(update_multipliers=False)
-        if tape.turns is not None and "contact_shift_outer" in meta.get("functions", ()):
-            multipliers = tape.turns.multiplier_functions()
-            checkpoint.read_functions(path, multipliers)
-            tape.turns.set_multipliers(multipliers)
+        tape.accept_state()
         tape.contact.hub_angle = meta["hub_angle"]
         tape.root.set(1.0, meta["hub_angle"])
         tape.contact.turn(meta["hub_angle"])

@@ -8,7 +8,6 @@ their own: the turns' contact is not a form (:class:`~tapecoil.contact.self_cont
 
 from __future__ import annotations
 
-import dolfinx
 import numpy as np
 
 from tapecoil.contact.self_contact import SelfContact
@@ -20,23 +19,13 @@ class TurnContact:
     """Self-contact of the tape's turns, its Verlet search and its pairs at the current state.
 
     ``nodes``: the shell's :class:`~tapecoil.models.shell.Nodes`; ``h`` [m]; ``penalty`` k
-    [N/m^3]; ``smoothing`` delta [m]; ``buffer`` the search's Verlet buffer [m];
-    ``augmented``: carry the pressures from step to step as multipliers
-    (:meth:`SelfContact.update_multipliers`).
+    [N/m^3]; ``smoothing`` delta [m]; ``buffer`` the search's Verlet buffer [m].
     """
 
     def __init__(
-        self,
-        model,
-        nodes,
-        frame: HubFrame,
-        h: float,
-        penalty: float,
-        smoothing: float,
-        buffer: float,
-        augmented: bool = False,
+        self, model, nodes, frame: HubFrame, h: float, penalty: float, smoothing: float, buffer: float
     ):
-        self.model, self.frame, self.augmented = model, frame, augmented
+        self.model, self.frame = model, frame
         self.self_contact = SelfContact(
             model, nodes, h, penalty, smoothing, buffer, exclusion=4 * (h + buffer), side_hint=self._coil_side
         )
@@ -72,33 +61,9 @@ class TurnContact:
         """Add the contact force dE/dq at the current state to the Function ``force`` (collective)."""
         self.self_contact.add_force(force, self.pairs())
 
-    def accept(self, update_multipliers: bool = True) -> None:
-        """After a converged step: the multipliers take this state's pressures (if augmented)
-        and the sides are read from it. A state read from a checkpoint brings its multipliers
-        (``update_multipliers`` False)."""
-        if self.augmented and update_multipliers:
-            self.self_contact.update_multipliers(self.pairs())
+    def accept(self) -> None:
+        """After a converged step: read the sides from this state."""
         self.self_contact.accept(self.model.q.x.array)
-
-    def multiplier_functions(self) -> dict:
-        """The multipliers (:attr:`SelfContact.shift`) of this rank's nodes as two scalar
-        functions on the nodes (outer and inner side), for a checkpoint."""
-        sc = self.self_contact
-        out = {}
-        for name, side in (("contact_shift_outer", 1), ("contact_shift_inner", 0)):
-            f = dolfinx.fem.Function(sc.nodes.space, name=name)
-            f.x.array[: sc.n_owned] = sc.shift[2 * sc.owned + side]
-            f.x.scatter_forward()
-            out[name] = f
-        return out
-
-    def set_multipliers(self, functions: dict) -> None:
-        """Take the multipliers from :meth:`multiplier_functions`' functions, read back."""
-        sc = self.self_contact
-        sc.shift[:] = 0.0
-        for name, side in (("contact_shift_outer", 1), ("contact_shift_inner", 0)):
-            sc.shift[2 * sc.owned + side] = functions[name].x.array[: sc.n_owned]
-        sc.accept(self.model.q.x.array)
 
     def term(self, q, bcs, weight: float = 1.0, previous=None) -> SelfContactTerm:
         """The solver term of the turns' contact (:class:`SelfContactTerm`)."""
