@@ -119,8 +119,8 @@ def test_benchmark_coils_on_its_own_turns():
     obstacle): where the turns lie is a prediction. Against physics.md with the spiral run's
     tolerances, and the separation of distinct turns read from the surface snapshots alone
     (independent of the contact code) at least 0.6 h at every step (the spiral run's: 0.46 h).
-    Measured (2 ranks, 12.5 min): energy -2.8 %, outer radius +0.72 %, turn separation 1.001 h,
-    closest turns 0.73 h, hub torque's two readings 0.26 % apart."""
+    Measured (2 ranks, 5 to 12.5 min): energy -2.8 %, outer radius +0.72 %, turn separation
+    1.001 h, closest turns 0.64 to 0.73 h, hub torque's two readings 0.2 to 0.3 % apart."""
     from tapecoil.app import results
     from tapecoil.config import load_config
     from tapecoil.measures.separation import separation_measure
