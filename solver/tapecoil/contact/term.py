@@ -184,15 +184,37 @@ class SelfContactTerm:
     def _widen(self, A: PETSc.Mat, dofs: np.ndarray) -> None:
         """Add the couplings of the pairs ``dofs`` (P, 30) to A's nonzero pattern (collective).
 
-        The couplings go into a matrix C of zeros (PETSc's stash takes the rows other ranks own;
-        C is small, so its own growth costs little), and A + C with a different pattern builds
-        the union pattern with its exact preallocation in one pass, instead of a reallocation of
-        A for each row that gains an entry.
+        The couplings go into a matrix C of zeros (PETSc's stash takes the rows other ranks own),
+        and A + C with a different pattern builds the union pattern with its exact preallocation
+        in one pass, instead of a reallocation of A for each row that gains an entry. C itself
+        is preallocated from the couplings counted row by row (summed over the ranks, so an
+        upper bound where two ranks' pairs share a row): grown entry by entry instead, a
+        widening by all the pairs of the default-mesh benchmark's coil took 18.7 s, against
+        0.15 s for the Jacobian it served.
         """
+        comm = self.contact.comm
+        n = A.getSize()[0]
+        width = dofs.shape[1]
+        rows = np.repeat(dofs, width, axis=1).ravel().astype(np.int64)
+        cols = np.tile(dofs, (1, width)).ravel().astype(np.int64)
+        used = (rows >= 0) & (cols >= 0)
+        key = np.unique(rows[used] * n + cols[used])
+        rows, cols = key // n, key % n
+        ranges = np.asarray(A.getOwnershipRanges(), dtype=np.int64)
+        owner = np.searchsorted(ranges, rows, side="right") - 1
+        diagonal = (cols >= ranges[owner]) & (cols < ranges[owner + 1])
+        counts = np.zeros((2, n), dtype=np.int64)
+        counts[0] = np.bincount(rows[diagonal], minlength=n)
+        counts[1] = np.bincount(rows[~diagonal], minlength=n)
+        comm.Allreduce(MPI.IN_PLACE, counts, op=MPI.SUM)
+        start, stop = A.getOwnershipRange()
+        local_columns = stop - start
+        d_nnz = np.minimum(counts[0, start:stop], local_columns).astype(PETSc.IntType)
+        o_nnz = np.minimum(counts[1, start:stop], n - local_columns).astype(PETSc.IntType)
         C = PETSc.Mat().create(A.getComm())
         C.setSizes(A.getSizes())
         C.setType(PETSc.Mat.Type.AIJ)
-        C.setPreallocationNNZ((30, 30))
+        C.setPreallocationNNZ((d_nnz, o_nnz))
         C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         zeros = np.zeros((dofs.shape[1], dofs.shape[1]))
         for pair in dofs:
