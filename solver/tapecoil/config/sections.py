@@ -228,7 +228,7 @@ class ContactConfig:
         turns: what keeps the turns apart: 'spiral' (the ideal spiral r_hub + n h as a rigid
             obstacle, from each point's winding angle) or 'surface' (contact of the tape's real
             surfaces with each other, two-sided, from the current geometry: the turns' radii
-            predicted, 3 to 18 times slower; see the README).
+            predicted, 3 to 6 times slower; see the README).
         penalty: penalty stiffness per unit area [N/m^3]; 0 derives it from the shell stiffness
             and the mesh size (see the contact module).
         penalty_scale: factor on the derived penalty [-].
