@@ -101,7 +101,7 @@ class SelfContactTerm:
         if self.contact._reference_version != self._converged_version:
             self._memory_converged[:] = self._memory
             self._converged_version = self.contact._reference_version
-            stale = len(self._pattern) - len(self._pattern & self._live)
+            stale = len(self._pattern - self._live)
             counts = self.contact.comm.allreduce(np.array([stale, len(self._live)]), op=MPI.SUM)
             renew = bool(counts[0] > max(counts[1], 1))
             if renew:
@@ -142,8 +142,9 @@ class SelfContactTerm:
         self._coupling = (pairs, self.contact.normal_derivatives(pairs))
         t0 = time.perf_counter()
         keys = pairs.node * len(self.contact.cells) + pairs.cell
-        self._live = set(keys.tolist())
-        new = np.array([k not in self._pattern for k in keys.tolist()], dtype=bool)
+        listed = keys.tolist()
+        self._live = set(listed)
+        new = np.array([k not in self._pattern for k in listed], dtype=bool)
         A.assemble()
         widen = self.contact.comm.allreduce(int(new.sum()), op=MPI.SUM) > 0
         if widen:
@@ -216,7 +217,7 @@ class SelfContactTerm:
         C.setType(PETSc.Mat.Type.AIJ)
         C.setPreallocationNNZ((d_nnz, o_nnz))
         C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-        zeros = np.zeros((dofs.shape[1], dofs.shape[1]))
+        zeros = np.zeros((width, width))
         for pair in dofs:
             C.setValues(pair, pair, zeros, addv=PETSc.InsertMode.ADD)
         C.assemble()
