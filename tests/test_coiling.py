@@ -178,6 +178,26 @@ def test_checkpoint_round_trip(coiled_short, tmp_path):
     assert np.allclose(np.sort(restored.contact.psi.x.array), np.sort(model.contact.psi.x.array))
 
 
+def test_a_tape_that_sinks_too_deep_stops_the_run_with_the_last_accepted_state():
+    """A penalty far too soft (1e7 N/m^3 against the derived 8e9) lets the short tape sink into
+    the hub as it wraps: steps that go deeper than contact.stop_penetration = 1 h are cut back,
+    and the run stops, naming the key, where no shorter step stays within it; the state kept
+    is the last accepted one, within the limit and close to it."""
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+
+    cfg = short_tape(hub_angle=2.5)
+    cfg = dataclasses.replace(cfg, contact=dataclasses.replace(cfg.contact, penalty=1e7))
+    model = CoilingModel(cfg, MPI.COMM_SELF)
+    result = CoilingRun(model).run()
+    h = cfg.tape.h
+    assert not result.completed
+    assert "contact.stop_penetration = 1 h" in result.message and "last converged load" in result.message
+    assert result.history[-1]["hub_angle"] < 2.0
+    assert all(r["max_penetration"] <= h for r in result.history)
+    assert 0.9 * h < model.tape.max_penetration() <= h
+
+
 def test_bad_coiling_config_is_rejected_before_computing():
     from tapecoil.config import ConfigError, config_from_dict
 

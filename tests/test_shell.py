@@ -185,6 +185,57 @@ def test_continuation_stops_with_the_last_converged_state():
     assert [round(s.load, 6) for s in run.history] == [0.2, 0.4, 0.5]
 
 
+def test_a_refused_state_is_cut_back_and_then_stops_the_run_with_the_last_accepted_one():
+    """A converged state the run refuses (a penetration too deep) is not taken: the step is cut
+    back as after a failed solve; where no shorter step is accepted either, the run stops with
+    the refusal's message and the last accepted state, with relaxation available or not.
+
+    The model: every solve converges to x = t. In the first run a step longer than 0.1 past
+    t = 0.3 penetrates too deep (as an impact a long step does not resolve), which the shorter
+    steps avoid; in the second every state beyond t = 0.5 does, which no step avoids.
+    """
+    from types import SimpleNamespace
+
+    from tapecoil.config import StepControl
+    from tapecoil.core.stepping import Continuation, ContinuationError
+
+    state, relaxation = one_dof_with_relaxation()
+    load = {"t": 0.0, "from": 0.0}
+
+    def solve():
+        load["from"] = state.x.array[0]  # the last accepted state: a refused one is undone
+        state.x.array[:] = load["t"]
+        return SimpleNamespace(converged=True, iterations=9)
+
+    def long_step_refused():
+        return "too deep" if load["t"] > 0.3 and load["t"] - load["from"] > 0.1 + 1e-12 else None
+
+    control = StepControl(
+        initial_step=0.2, max_step=0.2, min_step=1e-6, grow=1.0, cutback=0.5, max_cutbacks=3
+    )
+    run = Continuation(solve, lambda t: load.update(t=t), state, control, refusal=long_step_refused)
+    history = run.run(0.0, 1.0)
+    # 0.4 is refused after 0.2, and 0.3 taken instead; on from there in the shorter steps
+    assert [round(r.load, 6) for r in history] == [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]
+    assert [r.cutbacks for r in history[:3]] == [0, 1, 0]
+
+    state.x.array[:], load["t"] = 0.0, 0.0
+    beyond = Continuation(
+        solve,
+        lambda t: load.update(t=t),
+        state,
+        control,
+        relaxation=relaxation,
+        refusal=lambda: "the tape penetrates too deep" if load["t"] > 0.5 else None,
+    )
+    with pytest.raises(
+        ContinuationError, match=r"^the tape penetrates too deep, at load .*last converged load 0\.5$"
+    ):
+        beyond.run(0.0, 1.0)
+    assert state.x.array[0] == pytest.approx(0.5) and load["t"] == pytest.approx(0.5)
+    assert not any(r.relaxed for r in beyond.history)
+
+
 def one_dof_with_relaxation():
     """A state of one dof (with the function space the relaxation's norm asks for) and a
     relaxation of it, for the continuation's tests."""

@@ -237,7 +237,8 @@ class ContactConfig:
         stop_penetration: deepest penetration of the hub or of the tape's own turns, as a
             fraction of the thickness h, that a run accepts [-], in (0, 100] (the default h: the
             faces overlap by a whole thickness and the penalty no longer holds the tape's
-            shape); a run that goes deeper stops with a message naming it, its state saved.
+            shape); a step that goes deeper is cut back, and where no shorter step stays
+            within it the run stops with a message naming it, the last accepted state saved.
             Equal-sense coiling starts with the section's edges inside the hub until the root
             is flattened onto it, and needs more.
         search_margin: ('surface') buffer of the contact search between turns, as a fraction of the

@@ -87,6 +87,9 @@ class Continuation:
     predict: Callable[[float, float], None] | None = None
     # error(): the converged step's local error over its tolerance (None: steps by Newton alone)
     error: Callable[[], float] | None = None
+    # refusal(): why a converged state is not accepted (None: accepted); such a step is cut
+    # back as a failed solve is, and the message is the run's when no shorter step passes
+    refusal: Callable[[], str | None] | None = None
     easy_iterations: int = 5
     history: list[StepRecord] = field(default_factory=list)
 
@@ -164,17 +167,22 @@ class Continuation:
                 self.predict(t, target)
             result = self.solve()
             iterations, relaxed = result.iterations, False
-            if not result.converged:
+            refused = self.refusal() if (result.converged and self.refusal is not None) else None
+            if not result.converged or refused is not None:
                 self.state.x.array[:] = saved
                 cutbacks += 1
                 dt *= ctl.cutback
-                creeping = self.relaxation is not None and limping + cutbacks > ctl.max_cutbacks
+                # creeping towards a snap, or towards a load no step reaches without refusal
+                creeping = (self.relaxation is not None or refused is not None) and (
+                    limping + cutbacks > ctl.max_cutbacks
+                )
                 if cutbacks <= ctl.max_cutbacks and abs(dt) >= ctl.min_step * abs(span) and not creeping:
                     continue
-                if self.relaxation is None:
+                if refused is not None or self.relaxation is None:
                     self.set_load(t)
+                    what = f"{refused}, at load" if refused else "no convergence at load"
                     raise ContinuationError(
-                        f"no convergence at load {target:.6g} after {cutbacks - 1} cut-backs "
+                        f"{what} {target:.6g} after {cutbacks - 1} cut-backs "
                         f"(step {abs(dt / ctl.cutback):.3g}); last converged load {t:.6g}",
                         t,
                     )

@@ -26,7 +26,6 @@ from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpo
 from tapecoil.phases.coiling_rows import CoilingRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.stepped import SteppedRun
-from tapecoil.phases.tape_on_hub import check_penetration
 
 
 @dataclass
@@ -133,12 +132,12 @@ class CoilingRun(SteppedRun):
         def converged(step):
             m.update(step.load)
             self.next_step = step.next_step
-            row = self._record(self.rows.row("coil", step.load, step))
-            check_penetration(row["max_penetration"], m.config, step.load, f"hub angle {step.load:.6g} rad")
+            self._record(self.rows.row("coil", step.load, step))
             self._check_stop(m.comm)
 
         m.update(start_angle)
         cont = self.continuation(m.set_hub_angle, control, predict=m.predict)
+        cont.refusal = m.tape.penetration_refusal
         cont.on_step = converged
         cont.run(start_angle, final_angle, stops, first_step=first_step)
 

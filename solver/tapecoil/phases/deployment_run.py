@@ -27,7 +27,7 @@ from tapecoil.phases.deployment import (
 from tapecoil.phases.deployment_rows import DeploymentRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.stepped import SteppedRun
-from tapecoil.phases.tape_on_hub import TapeOnHub, check_penetration
+from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
 @dataclass
@@ -128,7 +128,6 @@ class DeploymentRun(SteppedRun):
             self.next_step = step.next_step if step.load < end else None
             self.rows.add_update_energy(m.update())
             row = self._record(self.rows.row(step.load, step))
-            check_penetration(row["max_penetration"], m.config, step.load, f"t = {step.load:.6g} s")
             if row["lambda"] >= d.lambda_end:
                 raise _Deployed
             self._check_stop(m.comm)
@@ -149,6 +148,7 @@ class DeploymentRun(SteppedRun):
                     control(max_dt, end - self.time),
                     predict=predict,
                     error=m.step_error if d.error_tolerance > 0 else None,
+                    refusal=m.tape.penetration_refusal,
                     easy_iterations=self.easy_iterations,
                 )
                 cont.on_step = lambda step, end=end: converged(step, end)

@@ -22,7 +22,6 @@ from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
-from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_strip_mesh
 from tapecoil.geometry.sections import CircularArcSection
 from tapecoil.geometry.surfaces import StripGeometry
@@ -32,19 +31,6 @@ from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, shell_material
 from tapecoil.phases import centre_line as centre
 from tapecoil.phases.turn_contact import TurnContact
-
-
-def check_penetration(penetration: float, config, load: float, where: str) -> None:
-    """Stop (ContinuationError at ``load``) if the tape has gone deeper into the hub or itself
-    than ``contact.stop_penetration`` h: the penalty no longer keeps the faces apart."""
-    h, limit = config.tape.h, config.contact.stop_penetration
-    if penetration > limit * h:
-        raise ContinuationError(
-            f"at {where} the tape penetrates the hub or its own turns by {penetration / h:.3g} h, more "
-            f"than contact.stop_penetration = {limit:g} h: the contact no longer keeps the faces apart "
-            "(a stiffer contact.penalty_scale or a finer mesh); the state saved is this step's",
-            load,
-        )
 
 
 class TapeOnHub:
@@ -143,6 +129,21 @@ class TapeOnHub:
         local = self.contact.nodal_penetration()
         hub = max(self.comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX), 0.0)
         return hub if self.turns is None else max(hub, self.turns.max_penetration())
+
+    def penetration_refusal(self) -> str | None:
+        """Why the current state is refused, if the tape has gone deeper into the hub or into
+        itself than ``contact.stop_penetration`` h: the penalty no longer keeps the faces apart
+        (collective; None when it holds). The continuation cuts such a step back, and stops
+        with this message and the last accepted state when no shorter step passes."""
+        h, limit = self.config.tape.h, self.config.contact.stop_penetration
+        penetration = self.max_penetration()
+        if penetration <= limit * h:
+            return None
+        return (
+            f"the tape penetrates the hub or its own turns by {penetration / h:.4f} h, more than "
+            f"contact.stop_penetration = {limit:g} h: the contact no longer keeps the faces apart "
+            "(a stiffer contact.penalty_scale or a finer mesh)"
+        )
 
     def add_self_contact_force(self, force: dolfinx.fem.Function) -> None:
         """Add the force of the turns' real contact dE/dq at the current state to ``force``
