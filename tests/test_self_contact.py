@@ -359,3 +359,18 @@ def test_the_matrix_pattern_is_renewed_when_old_pairs_outnumber_the_live_ones(fo
     model.q.x.scatter_forward()
     contact.accept(q0)
     assert renewed == [False, True, False] and term.pattern_renewals == 1
+
+
+def test_a_retry_forgets_the_partners_kept(folded):
+    """Consistency: within a solve a node keeps its partner cell while its closest point stays
+    inside it; a retry of the step (no state converged since) keeps none and starts from the
+    closest cells, as a run restarted from the converged state does. Deployments on the coarse
+    mesh that stopped with every cut-back failing went on when restarted from the state they
+    stopped at (docs/coiling.md); with the partners forgotten on a retry, they went on unstopped."""
+    _, _, _, term, _, _ = folded
+    term.begin()
+    pairs = term.current()
+    assert MPI.COMM_WORLD.allreduce(pairs.node.size) > 0
+    assert MPI.COMM_WORLD.allreduce(int((term._memory >= 0).sum())) > 0  # kept within the solve
+    term.begin()  # no state converged in between: a retry
+    assert np.all(term._memory == -1)

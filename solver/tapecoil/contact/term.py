@@ -51,8 +51,18 @@ class PairsAtState:
 # be 30 x 147 entries a pair and widen the factorisation. It is applied instead, exactly, in a
 # GMRES preconditioned by the factorised assembled matrix. The force along the partner's
 # smoothed normal is not the gradient of an energy, so neither matrix is symmetric: LU, not
-# MUMPS' LDL^T
-SOLVER_OPTIONS = {"pc_type": "lu", "ksp_type": "gmres", "ksp_rtol": 1e-8, "ksp_max_it": 100}
+# MUMPS' LDL^T. No divergence test: as pairs come and go within a Newton solve the residual
+# jumps by factors of 10 to 100 before it converges, and a cut-back step starts from a residual
+# so small that such a jump passes PETSc's 1e4 times the first residual, so every shorter step
+# was judged diverged (a deployment on the coarse mesh with a fourfold penalty stopped so at
+# 3.56 ms, and went on without the test; docs/coiling.md). Newton's iteration limit remains
+SOLVER_OPTIONS = {
+    "pc_type": "lu",
+    "ksp_type": "gmres",
+    "ksp_rtol": 1e-8,
+    "ksp_max_it": 100,
+    "snes_divergence_tolerance": -1,
+}
 
 
 class SelfContactTerm:
@@ -77,7 +87,7 @@ class SelfContactTerm:
         self._kept = {"current": PairsAtState(contact), "previous": PairsAtState(contact)}
         self._pattern: set[int] = set()
         self._memory = np.full(2 * contact.n_nodes, -1, dtype=np.int64)
-        self._memory_converged, self._converged_version = self._memory.copy(), -1
+        self._converged_version = -1
         self._coupling = None
         self._live: set[int] = set()
         self.pattern_extensions = self.pattern_renewals = 0
@@ -87,10 +97,12 @@ class SelfContactTerm:
         return self._kept[name].get(q, lambda: self.contact.pairs(q, search, self.dofs, memory))
 
     def begin(self) -> bool:
-        """Before a solve: the partners kept are those of the last converged state.
+        """Before a solve: the partners kept are those of the last converged state, or none.
 
         A solve that follows a converged one takes the partners it ended with; a retry (after
-        a failed solve, from the same converged state) forgets what the failed one chose.
+        a failed solve, from the same converged state) keeps none and starts from the closest
+        cells, as a run restarted from that state does: coarse-mesh deployments that stopped
+        with every cut-back failing went on when restarted there, and go on unstopped so.
         Returns True (on every rank) when the matrix should start again from the shell's
         pattern: the pairs in it that the last Jacobian no longer had outnumber those it had
         (collective). A coil's material runs through the ploy region and each node meets
@@ -99,7 +111,6 @@ class SelfContactTerm:
         """
         renew = False
         if self.contact._reference_version != self._converged_version:
-            self._memory_converged[:] = self._memory
             self._converged_version = self.contact._reference_version
             stale = len(self._pattern - self._live)
             counts = self.contact.comm.allreduce(np.array([stale, len(self._live)]), op=MPI.SUM)
@@ -108,7 +119,7 @@ class SelfContactTerm:
                 self._pattern.clear()
                 self.pattern_renewals += 1
         else:
-            self._memory[:] = self._memory_converged
+            self._memory[:] = -1
         for kept in self._kept.values():
             kept.clear()
         return renew
