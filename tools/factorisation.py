@@ -7,7 +7,8 @@ times MUMPS' factorisation of each for every PETSc option set given (comma-separ
 key=value, no leading dash; ``-`` for MUMPS' defaults): the first one (analysis and
 factorisation) and the mean of three more with the pattern kept. Prints the nonzeros, the
 entries of the factors (INFOG(29)), the operations of the elimination (RINFOG(3)) and the
-ordering MUMPS used (INFOG(7): 3 SCOTCH, 4 PORD, 5 METIS, ...).
+ordering MUMPS used (INFOG(7): 3 SCOTCH, 4 PORD, 5 METIS, ...); for another factorisation
+package (``pc_factor_mat_solver_type=superlu_dist``) the times alone and the package's name.
 
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/factorisation.py \\
         results/coil/stowed - mat_mumps_icntl_7=5 pc_type=cholesky
@@ -67,6 +68,7 @@ def factorise(matrix, options: dict) -> dict:
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
     ksp.setFromOptions()
+    package = ksp.getPC().getFactorSolverType()
     t0 = time.perf_counter()
     ksp.setUp()
     first = time.perf_counter() - t0
@@ -81,9 +83,9 @@ def factorise(matrix, options: dict) -> dict:
     out = {
         "first": comm.allreduce(first, op=MPI.MAX),
         "again": comm.allreduce(sum(again) / max(len(again), 1), op=MPI.MAX),
-        "factor_entries": factors.getMumpsInfog(29),
-        "operations": factors.getMumpsRinfog(3),
-        "ordering": factors.getMumpsInfog(7),
+        "factor_entries": factors.getMumpsInfog(29) if package == "mumps" else -1,
+        "operations": factors.getMumpsRinfog(3) if package == "mumps" else float("nan"),
+        "ordering": factors.getMumpsInfog(7) if package == "mumps" else package,
     }
     ksp.destroy()
     for key in options:
