@@ -90,6 +90,10 @@ class Continuation:
     # refusal(): why a converged state is not accepted (None: accepted); such a step is cut
     # back as a failed solve is, and the message is the run's when no shorter step passes
     refusal: Callable[[], str | None] | None = None
+    # commit(): called once a step is accepted, before its state is saved as the one to return
+    # to: a model that keeps part of its state outside ``state`` (the reference frames of a
+    # beam's incremental rotations) moves that part on and may rewrite ``state``
+    commit: Callable[[], None] | None = None
     easy_iterations: int = 5
     history: list[StepRecord] = field(default_factory=list)
 
@@ -210,6 +214,8 @@ class Continuation:
             if target == marks[0]:
                 marks.pop(0)
             t = target
+            if self.commit is not None:
+                self.commit()
             saved[:] = self.state.x.array
             easy = iterations <= self.easy_iterations and cutbacks == 0
             if error is None:
