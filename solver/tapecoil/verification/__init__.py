@@ -1,4 +1,4 @@
-"""Verification of the shell core against exact and published results (:mod:`.cases`).
+"""Verification of the shell core and the beam against exact and published results (:mod:`.cases`).
 
 The case names live here, apart from the cases, so that the command line can offer them as
 choices without loading DOLFINx: ``tapecoil theory`` and ``tapecoil config`` need none of it.
@@ -12,4 +12,6 @@ CASES = (
     "semicylinder",
     "slit-plate",
     "tape-fold",
+    "beam-rollup",
+    "beam-bend45",
 )

@@ -1,4 +1,4 @@
-"""Verification cases of the shell core, each returning computed values against references.
+"""Verification cases of the shell core and the beam, each returning computed values against references.
 
 The CLI (``tapecoil verify``) and the tests run the same functions.
 """
@@ -10,6 +10,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.verification import CASES
+from tapecoil.verification.beam import BEAM_MESHES, BEND_MESHES, beam_bend45, beam_rollup
 from tapecoil.verification.checks import CaseResult
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
@@ -53,6 +54,10 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = semicylinder(SEMICYLINDER_MESHES[preset], comm=comm, solver_config=config.solver)
     elif name == "slit-plate":
         result = slit_plate(SLIT_PLATE_MESHES[preset], comm=comm, solver_config=config.solver)
+    elif name == "beam-rollup":
+        result = beam_rollup(BEAM_MESHES[preset], comm=comm)
+    elif name == "beam-bend45":
+        result = beam_bend45(BEND_MESHES[preset], comm=comm)
     else:
         result = tape_fold(config, tape_res, comm=comm)
     result.info["preset"] = preset
