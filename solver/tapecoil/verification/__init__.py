@@ -14,4 +14,5 @@ CASES = (
     "tape-fold",
     "beam-rollup",
     "beam-bend45",
+    "beam-hub",
 )

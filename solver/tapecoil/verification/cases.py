@@ -10,7 +10,14 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.verification import CASES
-from tapecoil.verification.beam import BEAM_MESHES, BEND_MESHES, beam_bend45, beam_rollup
+from tapecoil.verification.beam import (
+    BEAM_MESHES,
+    BEND_MESHES,
+    HUB_MESHES,
+    beam_bend45,
+    beam_hub,
+    beam_rollup,
+)
 from tapecoil.verification.checks import CaseResult
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
@@ -58,6 +65,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = beam_rollup(BEAM_MESHES[preset], comm=comm)
     elif name == "beam-bend45":
         result = beam_bend45(BEND_MESHES[preset], comm=comm)
+    elif name == "beam-hub":
+        result = beam_hub(HUB_MESHES[preset], comm=comm)
     else:
         result = tape_fold(config, tape_res, comm=comm)
     result.info["preset"] = preset
