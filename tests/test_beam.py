@@ -106,6 +106,60 @@ def test_hub_contact_refuses_a_penalty_that_is_not_positive():
         problem.hub_contact((0, 0, -1), (0, 1, 0), 1.0, penalty=0.0)
 
 
+def test_two_sections_roll_up_into_two_arcs():
+    """Half the beam given twice the bending stiffness (`set_section`): an end moment bends each
+    half into its own arc, curvatures M/EI and M/(2 EI); the tip where the two arcs put it (to
+    1e-6 L) and the energy M^2 L/4 (1/EI + 1/(2 EI)) (to 1e-8)."""
+    import dataclasses
+
+    import dolfinx
+
+    L = 10.0
+    soft = BeamSection.rectangle(E=1.2e7, nu=0.0, width=1.0, depth=0.1)
+    stiff = dataclasses.replace(soft, EI2=2 * soft.EI2)
+    problem = BeamProblem(straight_line, L, 40, soft, fixed_frame)
+    owned = np.arange(problem.mesh.topology.index_map(1).size_local, dtype=np.int32)
+    middle = dolfinx.mesh.compute_midpoints(problem.mesh, 1, owned)[:, 0]
+    problem.model.set_section(owned[middle > L / 2], stiff)
+    problem.clamp((0, 0, 0))
+    M = math.pi * soft.EI2 / L  # the soft half turns by pi/2, the stiff one by pi/4
+    problem.end_load((L, 0, 0), moment=(0, M, 0))
+    problem.solve(1.0, first_step=0.1, max_step=0.2)
+    k1, k2 = M / soft.EI2, M / stiff.EI2
+    a1, a2 = k1 * L / 2, k1 * L / 2 + k2 * L / 2
+    # the tangent (cos phi, -sin phi) in (x, z), phi growing at k along each half
+    x = math.sin(a1) / k1 + (math.sin(a2) - math.sin(a1)) / k2
+    z = (math.cos(a1) - 1) / k1 + (math.cos(a2) - math.cos(a1)) / k2
+    assert np.linalg.norm(problem.position((L, 0, 0)) - [x, 0, z]) / L < 1e-6
+    energy = M**2 * L / 4 * (1 / soft.EI2 + 1 / stiff.EI2)
+    assert problem.model.strain_energy() == pytest.approx(energy, rel=1e-8)
+
+
+def test_a_flattened_strip_let_go_curls_to_its_natural_curvature():
+    """A flattened strip's section as a beam (`BeamSection.flattened_strip`): energy
+    (b D11/2)(K2 - K2_n)^2 + const with K2_n = -D12/(D11 R); clamped at one end and free, it
+    curls into the arc of curvature K2_n = -nu/R, its energy the constant (b/2)(D22 -
+    D12^2/D11)/R^2 per unit length, and wound to kappa its energy per length is b w(kappa) of the
+    physics brief."""
+    R, alpha, h, E, nu = 0.0151, 2.3562, 1e-4, 1.3e11, 0.3
+    b, D = R * alpha, E * h**3 / (12 * (1 - nu**2))
+    flat = BeamSection.flattened_strip(D, nu * D, D, R, b, h, E, nu)
+    kappa = 1 / 0.01275
+    w = D / 2 * (kappa**2 + 1 / R**2 + 2 * nu * kappa / R)
+    U = flat.EI2 / 2 * (kappa - flat.natural_curvature[1]) ** 2 + flat.energy_offset
+    assert U == pytest.approx(b * w, rel=1e-12)
+    L = 0.5 * R / nu  # curls by half a radian
+    problem = BeamProblem(straight_line, L, 10, flat, fixed_frame)
+    problem.clamp((0, 0, 0))
+    # no load to step: one solve from the straight strip, whose first Newton step stretches
+    # it (the linear step does not shorten it) far beyond PETSc's divergence test
+    problem.solve(1.0, first_step=1.0, max_step=1.0, options={"snes_divergence_tolerance": 1e300})
+    k = -nu / R
+    tip = [math.sin(k * L) / k, 0.0, -(1 - math.cos(k * L)) / k]
+    assert np.linalg.norm(problem.position((L, 0, 0)) - tip) / L < 1e-6
+    assert problem.model.strain_energy() == pytest.approx(flat.energy_offset * L, rel=1e-8)
+
+
 def test_arc_section_stiffnesses_against_a_wall_summed_in_pieces():
     """The thin arc's closed forms against the wall cut into 20,000 straight pieces (each a thin
     rectangle moved to the centroid, its own bending by its inclination) to 2e-4 (the closed

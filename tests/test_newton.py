@@ -141,6 +141,16 @@ def test_convergence_is_judged_on_the_residual(user_options):
     petsc.destroy()
 
 
+def test_the_turns_contact_solver_has_no_divergence_test():
+    """The turns' contact asks for no divergence test; -1 would give PETSc's default 1e4 (it is
+    PETSC_DETERMINE in PETSc 3.22 and 3.25), so the options must say 1e300."""
+    from tapecoil.contact.term import SOLVER_OPTIONS
+
+    s = SNESSolver.from_config(*offset_problem(1e7), SolverConfig(), prefix="toy_", **SOLVER_OPTIONS)
+    assert s.snes.getDivergenceTolerance() >= 1e300
+    s.destroy()
+
+
 def test_options_read_at_the_first_solve_reach_mumps(user_options):
     """MUMPS reads its ICNTL options when it factorises, at the first solve, not at setFromOptions."""
     s = solver("toy_", SolverConfig(petsc_options={"mat_mumps_icntl_14": 33, "mat_mumps_icntl_4": 1}))

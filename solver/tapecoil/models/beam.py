@@ -50,6 +50,8 @@ from tapecoil.theory import arc_second_moment
 
 __all__ = ["BeamProblem", "BeamSection", "GeometricallyExactBeam", "create_beam_mesh"]
 
+# a cell's section as a DG0 vector: EA, GA2, GA3, GJ, EI2, EI3, natural curvature (3), energy offset
+SECTION_FIELDS = 10
 # below this a^2 = |theta|^2 [rad^2] Rodrigues' coefficients are their Taylor series (error < 1e-17)
 SERIES_BELOW = 1e-4
 
@@ -71,12 +73,53 @@ class BeamSection:
     GJ: float
     EI2: float
     EI3: float
+    natural_curvature: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    energy_offset: float = 0.0
 
     def __post_init__(self):
         for name in ("EA", "GA2", "GA3", "GJ", "EI2", "EI3"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"beam section: {name} must be a positive number, got {value!r}")
+        if len(self.natural_curvature) != 3 or not all(math.isfinite(k) for k in self.natural_curvature):
+            raise ValueError(
+                f"beam section: natural_curvature must be 3 numbers, got {self.natural_curvature!r}"
+            )
+        if not math.isfinite(self.energy_offset):
+            raise ValueError(f"beam section: energy_offset must be a number, got {self.energy_offset!r}")
+
+    @classmethod
+    def flattened_strip(
+        cls,
+        D11: float,
+        D12: float,
+        D22: float,
+        R: float,
+        width: float,
+        h: float,
+        E: float,
+        nu: float,
+        coil_sign: float = 1.0,
+    ) -> BeamSection:
+        """A tape's section flattened in an opposite-sense coil, as a beam: its energy per unit
+        length b w(kappa) = (b/2)(D11 kappa^2 + D22/R^2 + 2 D12 kappa/R) (physics brief Sec. 3 and
+        10), kappa = ``coil_sign`` K2 the coil's curvature, is (b D11/2)(K2 - K2_n)^2 plus the
+        constant (b/2)(D22 - D12^2/D11)/R^2 [J/m]: a beam of bending stiffness b D11 about axis 2
+        whose natural curvature K2_n = -coil_sign D12/(D11 R) (a flattened strip curls the other
+        way by nu/R when let go). The flat strip's other stiffnesses: EA = E b h, EI3 = E h b^3/12,
+        GJ = G b h^3/3, shear 5/6 E b h/(2(1 + nu)). Rigidities D [N m], R, width b, h [m], E [Pa].
+        """
+        G = E / (2 * (1 + nu))
+        return cls(
+            EA=E * width * h,
+            GA2=G * width * h * 5 / 6,
+            GA3=G * width * h * 5 / 6,
+            GJ=G * width * h**3 / 3,
+            EI2=width * D11,
+            EI3=E * h * width**3 / 12,
+            natural_curvature=(0.0, -coil_sign * D12 / (D11 * R), 0.0),
+            energy_offset=width / 2 * (D22 - D12**2 / D11) / R**2,
+        )
 
     @classmethod
     def rectangle(
@@ -254,10 +297,18 @@ class GeometricallyExactBeam:
         dR = ufl.diff(rotation(theta_v), theta_v)  # (3, 3, 3): dR_ij / dtheta_k
         R_s = ufl.dot(dR, self.d_ds(self.theta))
         self.curvature = self.frame_n.T * _axial(R.T * R_s) + self.curvature_n
-        C_N = ufl.as_matrix(np.diag([section.EA, section.GA2, section.GA3]).tolist())
-        C_M = ufl.as_matrix(np.diag([section.GJ, section.EI2, section.EI3]).tolist())
-        bend = self.curvature - self.curvature_0
-        self.energy_density = 0.5 * ufl.dot(self.strain, C_N * self.strain) + 0.5 * ufl.dot(bend, C_M * bend)
+        # the section's stiffnesses cell by cell (one section everywhere unless set_section)
+        dg0 = dolfinx.fem.functionspace(mesh, ("DG", 0, (SECTION_FIELDS,)))
+        self.section_fields = dolfinx.fem.Function(dg0, name="section")
+        self.set_section(np.arange(mesh.topology.index_map(1).size_local, dtype=np.int32), section)
+        c = self.section_fields
+        C_N = ufl.as_matrix([[c[0], 0, 0], [0, c[1], 0], [0, 0, c[2]]])
+        C_M = ufl.as_matrix([[c[3], 0, 0], [0, c[4], 0], [0, 0, c[5]]])
+        natural = ufl.as_vector([c[6], c[7], c[8]])
+        bend = self.curvature - self.curvature_0 - natural
+        self.energy_density = (
+            0.5 * ufl.dot(self.strain, C_N * self.strain) + 0.5 * ufl.dot(bend, C_M * bend) + c[9]
+        )
         self.energy = self.energy_density * self.dx
         self.residual = ufl.derivative(self.energy, self.q, self.dq)
         self.jacobian = ufl.derivative(self.residual, self.q, ufl.TrialFunction(self.W))
@@ -265,6 +316,26 @@ class GeometricallyExactBeam:
         self._next_curvature = dolfinx.fem.Expression(self.curvature, points)
         _, theta_map = compat.collapse(self.W.sub(1))
         self._theta_dofs = theta_map
+
+    def set_section(self, cells: np.ndarray, section: BeamSection) -> None:
+        """Give the owned ``cells`` (local indices) the stiffnesses, natural curvature and energy
+        offset of ``section``; the ghosts follow (collective)."""
+        values = np.array(
+            [
+                section.EA,
+                section.GA2,
+                section.GA3,
+                section.GJ,
+                section.EI2,
+                section.EI3,
+                *section.natural_curvature,
+                section.energy_offset,
+            ]
+        )
+        dofs = np.asarray(self.section_fields.function_space.dofmap.list)[np.asarray(cells, dtype=np.int32)]
+        array = self.section_fields.x.array.reshape(-1, SECTION_FIELDS)
+        array[dofs.reshape(-1)] = values
+        self.section_fields.x.scatter_forward()
 
     def _at_points(self, expression) -> np.ndarray:
         """An Expression at the quadrature points of every local cell (owned and ghost), as
@@ -374,12 +445,14 @@ class BeamProblem:
             axis = axis / np.linalg.norm(axis)
             self._turning.append((u_values, theta_values, np.asarray(point, dtype=float), centre, axis))
 
-    def hold(self, point, components: tuple[int, ...]) -> None:
+    def hold(self, point, components: tuple[int, ...], rotation: bool = False) -> None:
         """Hold the displacement components ``components`` (0, 1, 2: x, y, z) of the node at
-        ``point`` at zero (a guide the node slides along)."""
+        ``point`` at zero (a guide the node slides along) and, with ``rotation``, its rotation."""
         vertices = self._vertices(point)
         for i in components:
             self._dirichlet((0, i), vertices)
+        if rotation:
+            self._dirichlet((1,), vertices)
 
     def end_load(self, point, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0), *, constant=False) -> None:
         """A force [N] and a moment [N m] on the node at ``point``, per unit load parameter (or,
@@ -436,10 +509,12 @@ class BeamProblem:
         rtol: float = 1e-9,
         atol: float = 1e-12,
         on_step=None,
+        options: dict | None = None,
     ) -> list[StepRecord]:
         """Step the load parameter from where it is to ``load_end``; steps are fractions of the
-        span. Raises :class:`~tapecoil.core.stepping.ContinuationError` (the last converged state
-        kept) when no step converges."""
+        span; ``options``: PETSc options for the solver (names without the prefix). Raises
+        :class:`~tapecoil.core.stepping.ContinuationError` (the last converged state kept) when no
+        step converges."""
         from tapecoil.config import StepControl
 
         model = self.model
@@ -452,7 +527,7 @@ class BeamProblem:
             model.q,
             self.bcs,
             prefix=f"{self.name}_",
-            options={"pc_factor_mat_solver_type": "mumps", "pc_type": "cholesky"},
+            options={"pc_factor_mat_solver_type": "mumps", "pc_type": "cholesky", **(options or {})},
             rtol=rtol,
             atol=atol,
             state_scale=model.rounding_scale(),
@@ -480,7 +555,9 @@ class BeamProblem:
         points = compat.interpolation_points(model.frame_n.function_space)
         index_map = self.mesh.topology.index_map(1)
         cells = np.arange(index_map.size_local, dtype=np.int32)
-        force = dolfinx.fem.Expression(model.section.EA * model.strain[0], points).eval(self.mesh, cells)
+        force = dolfinx.fem.Expression(model.section_fields[0] * model.strain[0], points).eval(
+            self.mesh, cells
+        )
         where = dolfinx.fem.Expression(ufl.SpatialCoordinate(self.mesh), points).eval(self.mesh, cells)
         comm = self.mesh.comm
         x = np.concatenate(comm.allgather(where.reshape(-1, 3)))
