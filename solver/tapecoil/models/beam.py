@@ -7,7 +7,10 @@ Gamma = Lambda^T r' - Gamma_0 (extension and the two shears) and K = axial(Lambd
 (torsion and the two bending curvatures); the energy per unit length is
 (1/2) Gamma . C_N Gamma + (1/2) (K - K_0) . C_M (K - K_0), C_N = diag(EA, GA2, GA3),
 C_M = diag(GJ, EI2, EI3), with Gamma_0 and K_0 those of the stress-free reference (so the
-reference is stress-free exactly, whatever the interpolation of its geometry).
+reference is stress-free exactly, whatever the interpolation of its geometry). Each element
+carries its section (:meth:`GeometricallyExactBeam.set_section`): the stiffnesses, a natural
+curvature K_n added to K_0 and a constant energy per unit length (a flattened tape's section,
+:meth:`BeamSection.flattened_strip`).
 
 Rotations are updated, not totalled (Cardona and Geradin 1988; Ibrahimbegovic 1995). The unknown
 theta is the spatial rotation vector of the current load step: Lambda = exp(theta^) Lambda_n,
