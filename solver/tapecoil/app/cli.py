@@ -49,7 +49,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     from tapecoil.verification import CASES
 
-    p = sub.add_parser("verify", help="run the shell verification cases against their references")
+    p = sub.add_parser(
+        "verify", help="run the shell's and the beam's verification cases against their references"
+    )
     p.add_argument("case", nargs="?", default="all", choices=(*CASES, "all"))
     p.add_argument("config", nargs="?", help="TOML configuration (the tape cases use its tape)")
     p.add_argument(

@@ -1,4 +1,4 @@
-"""``tapecoil verify``: the shell verification cases against their references."""
+"""``tapecoil verify``: the shell's and the beam's verification cases against their references."""
 
 from __future__ import annotations
 
