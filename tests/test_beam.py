@@ -6,17 +6,10 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from tapecoil.config import load_config
 from tapecoil.models.beam import BeamProblem, BeamSection
-from tapecoil.verification.beam import (
-    BEAM_MESHES,
-    BEND_MESHES,
-    HUB_MESHES,
-    beam_bend45,
-    beam_hub,
-    beam_rollup,
-    fixed_frame,
-    straight_line,
-)
+from tapecoil.verification.beam import beam_bend45, beam_hub, beam_rollup, fixed_frame, straight_line
+from tapecoil.verification.cases import run_case
 from tapecoil.verification.checks import CaseResult
 
 
@@ -45,7 +38,7 @@ def test_end_moment_rolls_the_beam_into_two_full_circles():
     turn and after two full turns the tip lies where the circle puts it (to 1e-6 of the length:
     quadratic elements on a circle) and the strain energy is M^2 L/(2 EI) (to 1e-8): the
     updated rotations wind past 2 pi (`tapecoil verify beam-rollup`)."""
-    result = beam_rollup(BEAM_MESHES["coarse"])
+    result = run_case("beam-rollup", load_config(), "coarse")
     assert_passed(result)
     assert len(result.checks) == 8
     assert result.info["steps"] >= 20
@@ -72,7 +65,7 @@ def test_45_degree_bend_under_an_out_of_plane_tip_force(preset):
     (13.721, 23.646, 53.578) along -x, -y and z. Published values spread by about 0.3 (Bathe and
     Bolourchi 1979: 13.4, 23.5, 53.4; Simo and Vu-Quoc 1986 the same): each component within
     0.5 % of the displacement's length (0.30)."""
-    result = beam_bend45(BEND_MESHES[preset])
+    result = run_case("beam-bend45", load_config(), preset)
     assert_passed(result)
 
 
@@ -96,7 +89,7 @@ def test_a_strip_wound_onto_a_hub_carries_the_pull_less_the_configurational_forc
     (`tapecoil verify beam-hub`): the axial force N that the wrap carries, read from its strains,
     is T - EI/(2 rho^2) (the configurational balance at the lift-off, within 0.5 %; measured
     -0.20 % on 100 elements, -0.07 % on 200) and uniform along the frictionless wrap (0.2 %)."""
-    assert_passed(beam_hub(HUB_MESHES["coarse"]))
+    assert_passed(run_case("beam-hub", load_config(), "coarse"))
 
 
 def test_hub_contact_refuses_a_penalty_that_is_not_positive():
