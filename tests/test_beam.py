@@ -7,7 +7,8 @@ import pytest
 from mpi4py import MPI
 
 from tapecoil.config import load_config
-from tapecoil.models.beam import BeamProblem, BeamSection
+from tapecoil.models.beam_problem import BeamProblem
+from tapecoil.models.beam_section import BeamSection
 from tapecoil.verification.beam import beam_bend45, beam_hub, beam_rollup, fixed_frame, straight_line
 from tapecoil.verification.cases import run_case
 from tapecoil.verification.checks import CaseResult

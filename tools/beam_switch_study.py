@@ -17,7 +17,8 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
-from tapecoil.models.beam import BeamProblem, BeamSection
+from tapecoil.models.beam_problem import BeamProblem
+from tapecoil.models.beam_section import BeamSection
 from tapecoil.verification.beam import fixed_frame, straight_line
 
 R, alpha, h, E, nu = 0.0151, 2.3562, 1e-4, 1.3e11, 0.3

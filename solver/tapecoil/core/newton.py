@@ -38,6 +38,18 @@ class SolveResult:
         return names.get(self.reason, str(self.reason))
 
 
+class PerUnitLoad:
+    """A point force's magnitude: ``factor`` times the load parameter ``load`` (anything with a
+    ``value``, a DOLFINx Constant), read when the residual is."""
+
+    def __init__(self, load, factor: float):
+        self.load, self.factor = load, factor
+
+    @property
+    def value(self) -> float:
+        return self.factor * float(self.load.value)
+
+
 @dataclass
 class PointForce:
     """A concentrated force on the dofs ``dofs`` (owned, local indices) of magnitude ``magnitude``.

@@ -26,7 +26,7 @@ from mpi4py import MPI
 
 from tapecoil.config import SolverConfig
 from tapecoil.core.dofs import global_scalar, node_value, owned_node_dofs
-from tapecoil.core.newton import PointForce, SNESSolver
+from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
 from tapecoil.geometry.meshes import XI1_MAX, XI1_MIN, XI2_MAX, XI2_MIN, MeshResolution, create_strip_mesh
 from tapecoil.geometry.surfaces import Surface
@@ -35,17 +35,6 @@ from tapecoil.models.shell import NaghdiShell, ShellMaterial
 from tapecoil.models.supports import fixed_point, symmetry_plane
 
 EDGES = {"xi1_min": XI1_MIN, "xi1_max": XI1_MAX, "xi2_min": XI2_MIN, "xi2_max": XI2_MAX}
-
-
-class _PerUnitLoad:
-    """A point force component: ``factor`` times the load parameter, read when the residual is."""
-
-    def __init__(self, load, factor: float):
-        self.load, self.factor = load, factor
-
-    @property
-    def value(self) -> float:
-        return self.factor * float(self.load.value)
 
 
 class ShellProblem:
@@ -126,7 +115,7 @@ class ShellProblem:
         for i, component in enumerate(np.asarray(force, dtype=float)):
             if component != 0.0:
                 dofs = owned_node_dofs(self.model.W, (0, i), point)
-                self.point_forces.append(PointForce(dofs, _PerUnitLoad(self.load, component)))
+                self.point_forces.append(PointForce(dofs, PerUnitLoad(self.load, component)))
 
     def edge_force(self, edge: str, force) -> None:
         """A force per unit (physical) length of the edge, fixed in direction, per unit lambda."""

@@ -20,7 +20,8 @@ import math
 import numpy as np
 from mpi4py import MPI
 
-from tapecoil.models.beam import BeamProblem, BeamSection
+from tapecoil.models.beam_problem import BeamProblem
+from tapecoil.models.beam_section import BeamSection
 from tapecoil.verification.checks import CaseResult, Check
 
 # elements along the beam per mesh preset

@@ -1,0 +1,213 @@
+"""A beam stated as a benchmark is (:class:`BeamProblem`): line, section, frame, supports (a
+clamp, one that turns with the load, a guide), end loads, a rigid hub, load steps."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from tapecoil.core import compat
+from tapecoil.core.dofs import owned_subspace_dofs
+from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
+from tapecoil.core.rotation import rotation_matrix
+from tapecoil.core.stepping import Continuation, StepRecord
+from tapecoil.models.beam import GeometricallyExactBeam, create_beam_mesh
+
+__all__ = ["BeamProblem"]
+
+
+class BeamProblem:
+    """A beam stated as a benchmark is: line, section, frame, supports, loads, load steps.
+
+    ``centre_line(s)`` and ``length``, ``elements``: the mesh (:func:`create_beam_mesh`);
+    ``section``, ``frame``: see :class:`GeometricallyExactBeam`. Loads are given per unit of a load
+    parameter (or held constant), and :meth:`solve` steps the parameter; a clamp may turn with it
+    as an angle. ``name``: the PETSc options prefix is ``name + "_"``.
+    """
+
+    def __init__(self, centre_line, length, elements, section, frame, *, comm=MPI.COMM_WORLD, name="beam"):
+        self.mesh = create_beam_mesh(comm, centre_line, length, elements)
+        self.mesh.topology.create_connectivity(0, 1)
+        self.model = GeometricallyExactBeam(self.mesh, section, frame)
+        self.name = name
+        self.load = dolfinx.fem.Constant(self.mesh, 0.0)  # the load parameter
+        self.committed_load = 0.0  # the load parameter of the last accepted step
+        self.bcs: list = []
+        self.point_forces: list[PointForce] = []
+        self.energy_terms: list = []  # UFL energies beside the beam's own (contact)
+        self._turning: list[tuple] = []  # (u function, theta function, point, axis point, axis)
+        self.history: list[StepRecord] = []
+
+    def _vertices(self, point) -> np.ndarray:
+        p = np.asarray(point, dtype=float)
+        scale = 1e-9 * (1.0 + np.abs(self.mesh.geometry.x).max(initial=0.0))
+        found = dolfinx.mesh.locate_entities(
+            self.mesh, 0, lambda x: np.all(np.abs(x - p[:, None]) <= scale, axis=0)
+        )
+        if self.mesh.comm.allreduce(len(found), op=MPI.MAX) == 0:
+            raise ValueError(f"no node of the beam at {tuple(p)}")
+        return found
+
+    def _dirichlet(self, sub: tuple[int, ...], vertices):
+        """A Dirichlet condition on the subspace ``sub`` at ``vertices`` and the Function of its values."""
+        space = self.model.W
+        for i in sub:
+            space = space.sub(i)
+        collapsed, _ = space.collapse()
+        dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), 0, vertices)
+        values = dolfinx.fem.Function(collapsed)
+        self.bcs.append(dolfinx.fem.dirichletbc(values, dofs, space))
+        return values
+
+    def clamp(self, point, turning_about: tuple | None = None) -> None:
+        """Hold the node at ``point`` [m]: its displacement and rotation. ``turning_about`` =
+        (a point of the axis [m], the axis's direction): the clamp turns about that axis by the
+        load parameter [rad] (a hub that the beam's root is fixed to)."""
+        vertices = self._vertices(point)
+        u_values = self._dirichlet((0,), vertices)
+        theta_values = self._dirichlet((1,), vertices)
+        if turning_about is not None:
+            centre, axis = (np.asarray(v, dtype=float) for v in turning_about)
+            axis = axis / np.linalg.norm(axis)
+            self._turning.append((u_values, theta_values, np.asarray(point, dtype=float), centre, axis))
+
+    def hold(self, point, components: tuple[int, ...], rotation: bool = False) -> None:
+        """Hold the displacement components ``components`` (0, 1, 2: x, y, z) of the node at
+        ``point`` at zero (a guide the node slides along) and, with ``rotation``, its rotation."""
+        vertices = self._vertices(point)
+        for i in components:
+            self._dirichlet((0, i), vertices)
+        if rotation:
+            self._dirichlet((1,), vertices)
+
+    def end_load(self, point, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0), *, constant=False) -> None:
+        """A force [N] and a moment [N m] on the node at ``point``, per unit load parameter (or,
+        ``constant``, as given at every load), both of fixed direction (dead loads); the moment
+        does work on the spatial rotation, exactly so when it keeps its axis (plane bending)."""
+        vertices = self._vertices(point)
+        for sub, vector in ((0, force), (1, moment)):
+            for i, value in enumerate(vector):
+                if value != 0.0:
+                    dofs = owned_subspace_dofs(self.model.W, (sub, i), 0, vertices)
+                    magnitude = (
+                        SimpleNamespace(value=float(value)) if constant else PerUnitLoad(self.load, value)
+                    )
+                    self.point_forces.append(PointForce(dofs, magnitude))
+
+    def hub_contact(self, axis_point, axis, radius: float, penalty: float) -> None:
+        """Keep the beam's line at least ``radius`` [m] from the axis through ``axis_point`` along
+        ``axis``: the energy (k/2) <radius - distance>^2 per unit length, k = ``penalty``
+        [N/m^2] (a rigid hub; the line penetrates it by about the pressure / k)."""
+        if not (math.isfinite(penalty) and penalty > 0):
+            raise ValueError(f"hub contact: the penalty must be a positive number, got {penalty!r}")
+        centre = ufl.as_vector([float(c) for c in axis_point])
+        a = np.asarray(axis, dtype=float)
+        a = ufl.as_vector((a / np.linalg.norm(a)).tolist())
+        d = ufl.SpatialCoordinate(self.mesh) + self.model.u - centre
+        radial = d - ufl.dot(d, a) * a
+        distance = ufl.sqrt(ufl.dot(radial, radial))
+        penetration = ufl.max_value(radius - distance, 0.0)
+        self.energy_terms.append(0.5 * penalty * penetration**2 * self.model.dx)
+
+    def _set_load(self, value: float) -> None:
+        self.load.value = value
+        for u_values, theta_values, point, centre, axis in self._turning:
+            R = rotation_matrix(axis, value)
+            u = R @ (point - centre) + centre - point
+            u_values.x.array[:] = np.tile(u, len(u_values.x.array) // 3)
+            increment = (value - self.committed_load) * axis  # the rotation since the last accepted step
+            theta_values.x.array[:] = np.tile(increment, len(theta_values.x.array) // 3)
+
+    def _commit(self) -> None:
+        self.model.commit()
+        self.committed_load = float(self.load.value)
+        for _, theta_values, *_ in self._turning:
+            theta_values.x.array[:] = 0.0
+
+    def solve(
+        self,
+        load_end: float,
+        *,
+        first_step: float,
+        max_step: float,
+        min_step: float = 1e-4,
+        grow: float = 1.5,
+        cutback: float = 0.5,
+        max_cutbacks: int = 8,
+        rtol: float = 1e-9,
+        atol: float = 1e-12,
+        on_step=None,
+        options: dict | None = None,
+    ) -> list[StepRecord]:
+        """Step the load parameter from where it is to ``load_end``; steps are fractions of the
+        span; ``options``: PETSc options for the solver (names without the prefix). Raises
+        :class:`~tapecoil.core.stepping.ContinuationError` (the last converged state kept) when no
+        step converges."""
+        from tapecoil.config import StepControl
+
+        model = self.model
+        energy = model.energy + sum(self.energy_terms)
+        residual = ufl.derivative(energy, model.q, model.dq)
+        jacobian = ufl.derivative(residual, model.q, ufl.TrialFunction(model.W))
+        solver = SNESSolver(
+            residual,
+            jacobian,
+            model.q,
+            self.bcs,
+            prefix=f"{self.name}_",
+            options={"pc_factor_mat_solver_type": "mumps", "pc_type": "cholesky", **(options or {})},
+            rtol=rtol,
+            atol=atol,
+            state_scale=model.rounding_scale(),
+        )
+        solver.point_forces = self.point_forces
+        control = StepControl(first_step, max_step, min_step, grow, cutback, max_cutbacks)
+        continuation = Continuation(
+            solve=solver.solve,
+            set_load=self._set_load,
+            state=model.q,
+            control=control,
+            commit=self._commit,
+            on_step=on_step,
+        )
+        try:
+            self.history += continuation.run(self.committed_load, load_end)
+        finally:
+            solver.destroy()
+        return self.history
+
+    def axial_force(self) -> tuple[np.ndarray, np.ndarray]:
+        """The axial force N = EA Gamma_1 [N] at every quadrature point of the beam, with the
+        points' reference positions (n, 3) [m], gathered on every rank (collective)."""
+        model = self.model
+        points = compat.interpolation_points(model.frame_n.function_space)
+        index_map = self.mesh.topology.index_map(1)
+        cells = np.arange(index_map.size_local, dtype=np.int32)
+        force = dolfinx.fem.Expression(model.section_fields[0] * model.strain[0], points).eval(
+            self.mesh, cells
+        )
+        where = dolfinx.fem.Expression(ufl.SpatialCoordinate(self.mesh), points).eval(self.mesh, cells)
+        comm = self.mesh.comm
+        x = np.concatenate(comm.allgather(where.reshape(-1, 3)))
+        N = np.concatenate(comm.allgather(force.reshape(-1)))
+        return x, N
+
+    def position(self, point) -> np.ndarray:
+        """The current position [m] of the node whose reference position is ``point`` (collective)."""
+        vertices = self._vertices(point)
+        values = np.zeros(3)
+        count = 0
+        for i in range(3):
+            dofs = owned_subspace_dofs(self.model.W, (0, i), 0, vertices)
+            values[i] = self.model.q.x.array[dofs].sum()
+            count = max(count, len(dofs))
+        comm = self.mesh.comm
+        values = comm.allreduce(values, op=MPI.SUM)
+        if comm.allreduce(count, op=MPI.SUM) != 1:
+            raise ValueError(f"expected one node at {tuple(point)}")
+        return np.asarray(point, dtype=float) + values
