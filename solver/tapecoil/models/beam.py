@@ -9,7 +9,7 @@ Gamma = Lambda^T r' - Gamma_0 (extension and the two shears) and K = axial(Lambd
 C_M = diag(GJ, EI2, EI3), with Gamma_0 and K_0 those of the stress-free reference (so the
 reference is stress-free exactly, whatever the interpolation of its geometry). Each element
 carries its section (:meth:`GeometricallyExactBeam.set_section`): the stiffnesses, a natural
-curvature K_n added to K_0 and a constant energy per unit length (a flattened tape's section,
+curvature K_nat added to K_0 and a constant energy per unit length (a flattened tape's section,
 :meth:`BeamSection.flattened_strip`).
 
 Rotations are updated, not totalled (Cardona and Geradin 1988; Ibrahimbegovic 1995). The unknown
@@ -46,6 +46,7 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.core import compat
+from tapecoil.core.dofs import global_scalar
 from tapecoil.models.beam_section import BeamSection
 
 __all__ = ["BeamSection", "GeometricallyExactBeam", "create_beam_mesh"]
@@ -132,7 +133,7 @@ class GeometricallyExactBeam:
     """
 
     def __init__(self, mesh, section: BeamSection, frame: Callable[[np.ndarray], np.ndarray]):
-        self.mesh, self.section = mesh, section
+        self.mesh = mesh
         cell = mesh.basix_cell()
         P2 = basix.ufl.element("Lagrange", cell, 2, shape=(3,))
         self.W = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([P2, P2]))
@@ -185,9 +186,7 @@ class GeometricallyExactBeam:
         self.energy_density = (
             0.5 * ufl.dot(self.strain, C_N * self.strain) + 0.5 * ufl.dot(bend, C_M * bend) + c[9]
         )
-        self.energy = self.energy_density * self.dx
-        self.residual = ufl.derivative(self.energy, self.q, self.dq)
-        self.jacobian = ufl.derivative(self.residual, self.q, ufl.TrialFunction(self.W))
+        self.energy = self.energy_density * self.dx  # the solver differentiates it with its terms
         self._next_frame = dolfinx.fem.Expression(self.frame, points)
         self._next_curvature = dolfinx.fem.Expression(self.curvature, points)
         _, theta_map = compat.collapse(self.W.sub(1))
@@ -251,5 +250,4 @@ class GeometricallyExactBeam:
 
     def strain_energy(self) -> float:
         """The beam's strain energy [J] (collective)."""
-        local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(self.energy))
-        return self.mesh.comm.allreduce(local, op=MPI.SUM)
+        return global_scalar(self.energy, self.mesh.comm)
