@@ -406,3 +406,36 @@ def test_hub_torque_from_the_reactions_matches_the_energy_balance(coiled_short):
     measure = hub_torque_measure(history)
     assert measure is not None and measure["work_energy_balance_J"] > 0
     assert measure["passed"], measure
+
+
+def test_a_body_turned_with_the_hub_adds_its_energy_and_follows_the_hub_angle():
+    """CoilingModel's ``obstacles``: a body with a penalty energy (here a spring pulling every
+    point of the tape towards a height the body sets from the hub angle) is turned with the hub
+    and its energy is the model's."""
+    import dolfinx
+
+    from tapecoil.core.dofs import global_scalar
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.tape_on_hub import TapeOnHub
+
+    class Spring:
+        def __init__(self, tape):
+            self.height = dolfinx.fem.Constant(tape.model.mesh, 0.0)
+            self.energy = 0.5 * (tape.model.u[2] - self.height) ** 2 * tape.model.dx
+            self.angles = []
+
+        def turn(self, angle):
+            self.angles.append(angle)
+            self.height.value = angle
+
+    tape = TapeOnHub(short_tape(), MPI.COMM_SELF)
+    spring = Spring(tape)
+    model = CoilingModel(short_tape(), MPI.COMM_SELF, tape=tape, obstacles=(spring,))
+    model.set_flattening(0.5)
+    model.set_hub_angle(0.25)
+    assert spring.angles == [0.0, 0.25]
+    total = global_scalar(dolfinx.fem.form(model.energy), MPI.COMM_SELF)
+    alone = global_scalar(dolfinx.fem.form(tape.energy), MPI.COMM_SELF)
+    # the undeformed tape: the spring's energy is (1/2) 0.25^2 times the reference area
+    cfg = short_tape()
+    assert total - alone == pytest.approx(0.5 * 0.25**2 * cfg.tape.L * cfg.tape.b, rel=1e-3)

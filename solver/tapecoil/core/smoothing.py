@@ -1,4 +1,5 @@
-"""The C1 smoothstep 3 s^2 - 2 s^3 on [0, 1], clamped outside: ramps of loads and obstacles."""
+"""Smooth switches: the C1 smoothstep 3 s^2 - 2 s^3 on [0, 1], clamped outside (ramps of loads
+and obstacles), and the smoothed bracket of a penalty contact."""
 
 from __future__ import annotations
 
@@ -19,3 +20,14 @@ def smoothstep_ufl(x):
     import ufl
 
     return _polynomial(ufl.min_value(ufl.max_value(x, 0.0), 1.0))
+
+
+def penetration_ufl(gap, delta: float):
+    """The penetration <gap> of a penalty contact: max(gap, 0), or, with ``delta`` > 0, its
+    smooth version delta softplus(gap / delta) (UFL), written to be stable for either sign."""
+    import ufl
+
+    if delta > 0.0:
+        x = gap / delta
+        return delta * (ufl.max_value(x, 0.0) + ufl.ln(1.0 + ufl.exp(-abs(x))))
+    return ufl.max_value(gap, 0.0)

@@ -50,7 +50,7 @@ import dolfinx
 import numpy as np
 import ufl
 
-from tapecoil.core.smoothing import smoothstep, smoothstep_ufl
+from tapecoil.core.smoothing import penetration_ufl, smoothstep, smoothstep_ufl
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, Nodes
 
@@ -133,11 +133,7 @@ class CoilContact:
 
     def _bracket(self, gap):
         """The penetration <gap>: max(gap, 0), or its smooth version delta softplus(gap / delta)."""
-        delta = self.smoothing
-        if delta > 0.0:
-            x = gap / delta  # written to be stable for either sign
-            return delta * (ufl.max_value(x, 0.0) + ufl.ln(1.0 + ufl.exp(-abs(x))))
-        return ufl.max_value(gap, 0.0)
+        return penetration_ufl(gap, self.smoothing)
 
     def energy_secant_form(self, q_old, director_variation):
         """Contact virtual work in the direction dq, energy-consistent from q_old to q.

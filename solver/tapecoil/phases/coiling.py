@@ -54,6 +54,8 @@ class CoilingModel:
 
     ``tape``: an existing tape on its hub (a checkpoint's); otherwise one is built from
     ``config`` (or ``resolution``). The free end is pulled by the force T (``coiling.tension``).
+    ``obstacles``: further rigid bodies turned with the hub, each with a penalty ``energy`` (UFL)
+    and ``turn(hub_angle)`` (the seeds of :mod:`tapecoil.hub.seeds`).
     """
 
     def __init__(
@@ -62,6 +64,7 @@ class CoilingModel:
         comm=MPI.COMM_WORLD,
         resolution: MeshResolution | None = None,
         tape: TapeOnHub | None = None,
+        obstacles: tuple = (),
     ):
         self.config = config
         self.comm = comm
@@ -87,7 +90,8 @@ class CoilingModel:
         # the pull: T spread evenly over the free end's arc; its work is T times the end's mean u_x
         self.end_slide_form = dolfinx.fem.form(model.u[0] / tp.b * model.ds(FREE_END))
         pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
-        self.energy = tape.energy
+        self.obstacles = tuple(obstacles)
+        self.energy = tape.energy + sum(o.energy for o in self.obstacles)
         self.viscosity, self.previous, viscous = model.relaxation(length_scale=self.element_length)
         potential = self.energy - pull_work
         self.residual_form = ufl.derivative(potential, model.q, model.dq)
@@ -116,12 +120,17 @@ class CoilingModel:
     # -- loading --------------------------------------------------------------------------
     def set_flattening(self, f: float) -> None:
         self.root.set(f, 0.0)
-        self.contact.turn(0.0)
+        self._turn_hub(0.0)
         self.tension.value = f * self.config.coiling.tension
 
     def set_hub_angle(self, angle: float) -> None:
         self.root.set(1.0, angle)
+        self._turn_hub(angle)
+
+    def _turn_hub(self, angle: float) -> None:
         self.contact.turn(angle)
+        for obstacle in self.obstacles:
+            obstacle.turn(angle)
 
     def predict(self, angle_from: float, angle_to: float) -> None:
         """The state's initial guess at ``angle_to`` (:class:`CoilingPredictor`)."""

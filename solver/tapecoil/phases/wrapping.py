@@ -133,6 +133,28 @@ class EndDisplacement:
         self.value.x.array[:] = self.start + d
 
 
+def wrap_case(config: Config, study: WrapStudy, extra_length: float = 0.0) -> Config:
+    """The configuration the study wraps: the tape ``r_c wrap_angle + free_length`` long (plus
+    ``extra_length`` [m]), the hub turned by ``wrap_angle`` under the study's pull, the study's
+    mesh (see :class:`WrapStudy`)."""
+    tp, r_c, bending = config.tape, config.hub.radius, config.wall.bending
+    rho = r_c + tp.h / 2
+    eq_2_6 = theory.coiling_tension_bending(bending, tp.alpha, tp.R, rho)
+    eq_2_9 = theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, rho)
+    wrap = math.radians(study.wrap_angle)
+    pull = max(study.min_pull, study.wrap_pull * eq_2_9, study.bending_margin * eq_2_6)
+    return dataclasses.replace(
+        config,
+        tape=dataclasses.replace(tp, L=r_c * wrap + study.free_length + extra_length),
+        coiling=dataclasses.replace(config.coiling, hub_angle=wrap, tension=pull),
+        mesh=dataclasses.replace(
+            config.mesh,
+            element_size=min(study.element_size, 2 * math.pi * r_c / 24),
+            elements_across=study.elements_across,
+        ),
+    )
+
+
 class _Conformed(Exception):
     """The centre line conforms: the pull has found what it was looking for."""
 
@@ -153,24 +175,16 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
     eq_2_6 = theory.coiling_tension_bending(bending, tp.alpha, tp.R, rho)
     eq_2_9 = theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, rho)
     wrap = math.radians(study.wrap_angle)
-    pull = max(study.min_pull, study.wrap_pull * eq_2_9, study.bending_margin * eq_2_6)
-    length = r_c * wrap + study.free_length
-    case = dataclasses.replace(
-        config,
-        tape=dataclasses.replace(tp, L=length),
-        coiling=dataclasses.replace(config.coiling, hub_angle=wrap, tension=pull),
-        mesh=dataclasses.replace(
-            config.mesh,
-            element_size=min(study.element_size, 2 * math.pi * r_c / 24),
-            elements_across=study.elements_across,
-        ),
-    )
+    case = wrap_case(config, study)
+    pull = case.coiling.tension
     t0 = time.perf_counter()
     model = CoilingModel(case, comm)
     run = CoilingRun(model, max_step=study.wrap_step)
     history: list[dict] = []
 
     def measure(phase: str, d: float, iterations: int) -> dict:
+        # the winding angles from the state: the end's motion draws material round the hub
+        model.contact.update(wrap)
         line = model.tape.centre_line()
         edges = [(e["xi1"], e["radius"]) for e in edge_lines(model.tape)]
         reading = wrap_measure(
