@@ -58,6 +58,13 @@ from tapecoil.models.shell import NaghdiShell, Nodes
 TURN_MODELS = ("spiral", "surface")
 
 
+def spiral_obstacle(psi, r_hub: float, h: float, max_turns: int, ramp_width: float, step=smoothstep_ufl):
+    """The ideal spiral's radius at winding angle ``psi`` (the module's staircase): ``r_hub`` [m],
+    climbing by ``h`` [m] over the last ``ramp_width`` [rad] of each of ``max_turns`` turns.
+    ``step``: :func:`smoothstep_ufl` for a UFL ``psi``, :func:`smoothstep` for numbers."""
+    return r_hub + h * sum(step((psi - 2 * math.pi * k) / ramp_width + 1.0) for k in range(1, max_turns + 1))
+
+
 def default_penalty(E: float, h: float, element_length: float) -> float:
     """Penalty stiffness per unit area [N/m^3]: element contact stiffness E h / 100."""
     return 0.01 * E * h / element_length**2
@@ -104,11 +111,7 @@ class CoilContact:
         self.turns = turns
         self.hub_turn = dolfinx.fem.Constant(model.mesh, 0.0)
         if turns == "spiral":
-            steps = sum(
-                smoothstep_ufl((self.psi - 2 * math.pi * k) / ramp_width + 1.0)
-                for k in range(1, max_turns + 1)
-            )
-            self.obstacle = r_hub + h * steps
+            self.obstacle = spiral_obstacle(self.psi, r_hub, h, max_turns, ramp_width)
             # the hub carries the first turn up to the start of its climb; beyond, turns carry turns
             on_hub = ufl.conditional(ufl.lt(self.psi, 2 * math.pi - ramp_width), 1.0, 0.0)
         else:
@@ -173,9 +176,7 @@ class CoilContact:
     def spiral_radius(self, psi: np.ndarray) -> np.ndarray:
         """The radius [m] of the outer face of the turn beneath a point of winding angle psi on
         the ideal spiral (r_hub on the first turn, + h per turn, climbing over the root end)."""
-        k = np.arange(1, self.max_turns + 1)[:, None]
-        ramps = smoothstep((psi[None, :] - 2 * math.pi * k) / self.ramp_width + 1.0)
-        return self.r_hub + self.h * np.sum(ramps, axis=0)
+        return spiral_obstacle(psi, self.r_hub, self.h, self.max_turns, self.ramp_width, smoothstep)
 
     def polar(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distance from the axis and swept angle (:meth:`HubFrame.polar`) of points (3, n)."""

@@ -1,5 +1,6 @@
 """A beam stated as a benchmark is (:class:`BeamProblem`): line, section, frame, supports (a
-clamp, one that turns with the load, a guide), end loads, a rigid hub, load steps."""
+clamp, one that turns with the load, a guide), end loads, a rigid hub or turns wound on it,
+load steps."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from tapecoil.core import compat
 from tapecoil.core.dofs import owned_subspace_dofs
 from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.rotation import rotation_matrix
+from tapecoil.core.smoothing import penetration_ufl
 from tapecoil.core.stepping import Continuation, StepRecord
 from tapecoil.models.beam import GeometricallyExactBeam, create_beam_mesh
 
@@ -41,6 +43,7 @@ class BeamProblem:
         self.point_forces: list[PointForce] = []
         self.energy_terms: list = []  # UFL energies beside the beam's own (contact)
         self._turning: list[tuple] = []  # (u function, theta function, point, axis point, axis)
+        self._winding: list = []  # the winding contacts' updates of their angles
         self.history: list[StepRecord] = []
 
     def _vertices(self, point) -> np.ndarray:
@@ -114,6 +117,56 @@ class BeamProblem:
         penetration = ufl.max_value(radius - distance, 0.0)
         self.energy_terms.append(0.5 * penalty * penetration**2 * self.model.dx)
 
+    def winding_contact(
+        self, axis_point, axis, reference, obstacle, penalty: float, smoothing: float = 0.0
+    ) -> dolfinx.fem.Function:
+        """Keep the beam's line out of a cylinder about the axis through ``axis_point`` along
+        ``axis`` whose radius depends on how far each point has been wound round it:
+        ``obstacle(psi)`` [m] (UFL), the energy (k/2) <obstacle(psi) - distance>^2 per unit
+        length, k = ``penalty`` [N/m^2], the bracket smoothed over ``smoothing`` [m] as the
+        shell's (:func:`~tapecoil.core.smoothing.penetration_ufl`). Turns resting on turns (a
+        spiral obstacle, as the shell's ``contact.turns = "spiral"``).
+
+        psi, the winding angle [rad], is the load parameter (the hub angle of a clamp turning
+        about this axis) less the node's swept angle, measured about the axis in its right-hand
+        sense from ``reference`` (a direction from the axis: the root's at load 0). It is read
+        from the state after every accepted step and unwrapped continuously (a node moves less
+        than half a turn a step), so the nodes of successive turns keep their turn; within a
+        step it is held, and the obstacle's force is radial. Returns psi (at the line's nodes).
+        """
+        if not (math.isfinite(penalty) and penalty > 0):
+            raise ValueError(f"winding contact: the penalty must be a positive number, got {penalty!r}")
+        centre = np.asarray(axis_point, dtype=float)
+        a = np.asarray(axis, dtype=float)
+        a = a / np.linalg.norm(a)
+        e0 = np.asarray(reference, dtype=float)
+        e0 = e0 - np.dot(e0, a) * a
+        e0 = e0 / np.linalg.norm(e0)
+        components = [self.model.W.sub(0).sub(i).collapse() for i in range(3)]
+        space = components[0][0]
+        psi = dolfinx.fem.Function(space, name="winding_angle")
+        nodes = space.tabulate_dof_coordinates()[:, :3]
+        maps = [np.asarray(m) for _, m in components]
+
+        def swept() -> np.ndarray:
+            q = self.model.q.x.array
+            p = nodes + np.column_stack([q[m] for m in maps]) - centre
+            radial = p - np.outer(p @ a, a)
+            return np.arctan2(radial @ np.cross(a, e0), radial @ e0)
+
+        def update() -> None:
+            raw = self.committed_load - swept()
+            psi.x.array[:] += (raw - psi.x.array + math.pi) % (2 * math.pi) - math.pi
+
+        psi.x.array[:] = self.committed_load - swept()
+        self._winding.append(update)
+        d = ufl.SpatialCoordinate(self.mesh) + self.model.u - ufl.as_vector(centre.tolist())
+        av = ufl.as_vector(a.tolist())
+        radial = d - ufl.dot(d, av) * av
+        penetration = penetration_ufl(obstacle(psi) - ufl.sqrt(ufl.dot(radial, radial)), smoothing)
+        self.energy_terms.append(0.5 * penalty * penetration**2 * self.model.dx)
+        return psi
+
     def _set_load(self, value: float) -> None:
         self.load.value = value
         for u_values, theta_values, point, centre, axis in self._turning:
@@ -126,6 +179,8 @@ class BeamProblem:
     def _commit(self) -> None:
         self.model.commit()
         self.committed_load = float(self.load.value)
+        for update in self._winding:
+            update()
         for _, theta_values, *_ in self._turning:
             theta_values.x.array[:] = 0.0
 

@@ -15,4 +15,5 @@ CASES = (
     "beam-rollup",
     "beam-bend45",
     "beam-hub",
+    "beam-turns",
 )

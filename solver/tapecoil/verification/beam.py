@@ -11,6 +11,10 @@
   wrap's strains, against the configurational balance T - N = kappa U' - U = EI/(2 rho^2) at
   the lift-off (the balance behind Eq. 2.6 of the physics brief; the code imposes only the
   elastic law and the contact).
+- ``beam-turns``: the same strip wound almost three turns, each turn resting on the one
+  beneath (the spiral obstacle of the shell's ``contact.turns = "spiral"``): at the lift-off of
+  each turn the balance holds at that turn's radius, T - N = EI/(2 rho_k^2), rho_k = rho +
+  (k - 1) h, the law falling by a fifth from the first turn to the third.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import math
 import numpy as np
 from mpi4py import MPI
 
+from tapecoil.hub.contact import spiral_obstacle
 from tapecoil.models.beam_problem import BeamProblem
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.verification.checks import CaseResult, Check
@@ -28,6 +33,9 @@ from tapecoil.verification.checks import CaseResult, Check
 BEAM_MESHES = {"coarse": 20, "default": 40, "fine": 80}
 BEND_MESHES = {"coarse": 8, "default": 16, "fine": 32}
 HUB_MESHES = {"coarse": 100, "default": 200, "fine": 400}
+TURNS_MESHES = {"coarse": 180, "default": 360, "fine": 720}
+# the bracket's smoothing width [m]: a fifth of the line's sink into the first turn
+TURNS_SMOOTHING = 1e-6
 
 ROLLUP_LENGTH = 10.0  # [m]
 ROLLUP_STOPS = (0.25, 0.5, 1.0, 2.0)  # turns
@@ -189,5 +197,63 @@ def beam_hub(elements: int, comm=MPI.COMM_WORLD, wrap: float = 1.5 * math.pi) ->
             "newton_iterations": sum(step.iterations for step in history),
             "pull": pull,
             "axial_force": mean,
+        },
+    )
+
+
+def beam_turns(elements: int, comm=MPI.COMM_WORLD, turns: int = 3) -> CaseResult:
+    """The strip of :func:`beam_hub` (1.8 m) wound onto the hub and its own turns, to 0.6 rad
+    short of one, two and three full turns (``turns`` of them; collective): after each, N over the
+    turn being wound (winding angles from 1 rad past the turn's start to 3 rad short of the
+    lift-off: the lift-off's moment decays over sqrt(EI/T) = rho, 1 rad) against
+    T - EI/(2 rho_k^2), rho_k the line's radius on turn k (the obstacle's, rho + (k - 1) h; the
+    penalty sinks the line about 1e-4 rho into it).
+
+    The turns climb by h = 3 mm over the last 0.3 rad of each turn, where a turn passes over the
+    root; the read-out keeps clear of the climbs, where the radial contact force has a component
+    along the steep line.
+    """
+    rho, length, depth = 0.05, 1.8, 0.003
+    section = BeamSection.rectangle(E=2e11, nu=0.3, width=0.03, depth=depth)
+    pull = section.EI2 / rho**2
+    problem = BeamProblem(
+        straight_line, length, elements, section, fixed_frame, comm=comm, name="verify_beam_turns"
+    )
+    centre, axis = (0.0, 0.0, -rho), (0.0, -1.0, 0.0)
+    problem.clamp((0, 0, 0), turning_about=(centre, axis))
+    problem.hold((length, 0, 0), (1, 2))
+    problem.end_load((length, 0, 0), force=(pull, 0, 0), constant=True)
+    psi = problem.winding_contact(
+        centre,
+        axis,
+        (0.0, 0.0, 1.0),
+        lambda p: spiral_obstacle(p, rho, depth, 3, 0.3),
+        penalty=1e10,
+        smoothing=TURNS_SMOOTHING,
+    )
+    checks, ratios = [], []
+    for turn in range(1, turns + 1):
+        start = 2 * (turn - 1) * math.pi
+        wound = start + 2 * math.pi - 0.6
+        span = wound - problem.committed_load
+        problem.solve(wound, first_step=0.05 / span, max_step=0.1 / span)
+        x, N = problem.axial_force()
+        nodes = np.concatenate(comm.allgather(psi.function_space.tabulate_dof_coordinates()[:, 0]))
+        angles = np.concatenate(comm.allgather(psi.x.array))
+        s, first = np.unique(nodes, return_index=True)
+        at = np.interp(x[:, 0], s, angles[first])
+        middle = (at > start + 1.0) & (at < wound - 3.0)
+        radius = rho + (turn - 1) * depth
+        ratio = (pull - float(N[middle].mean())) / (section.EI2 / (2 * radius**2))
+        ratios.append(ratio)
+        checks.append(Check(f"turn {turn}: (T - N) / (EI / 2 rho_{turn}^2)", ratio, 1.0, 0.005))
+    return CaseResult(
+        "beam-turns",
+        checks,
+        {
+            "mesh": f"{elements} elements",
+            "steps": len(problem.history),
+            "newton_iterations": sum(step.iterations for step in problem.history),
+            "ratios": ratios,
         },
     )

@@ -14,9 +14,11 @@ from tapecoil.verification.beam import (
     BEAM_MESHES,
     BEND_MESHES,
     HUB_MESHES,
+    TURNS_MESHES,
     beam_bend45,
     beam_hub,
     beam_rollup,
+    beam_turns,
 )
 from tapecoil.verification.checks import CaseResult
 from tapecoil.verification.sze import (
@@ -67,6 +69,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = beam_bend45(BEND_MESHES[preset], comm=comm)
     elif name == "beam-hub":
         result = beam_hub(HUB_MESHES[preset], comm=comm)
+    elif name == "beam-turns":
+        result = beam_turns(TURNS_MESHES[preset], comm=comm)
     else:
         result = tape_fold(config, tape_res, comm=comm)
     result.info["preset"] = preset
