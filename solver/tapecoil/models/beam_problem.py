@@ -44,6 +44,7 @@ class BeamProblem:
         self.energy_terms: list = []  # UFL energies beside the beam's own (contact)
         self._turning: list[tuple] = []  # (u function, theta function, point, axis point, axis)
         self._winding: list = []  # the winding contacts' updates of their angles
+        self._predictors: list = []  # initial guesses of a step: predict(load_from, load_to)
         self.history: list[StepRecord] = []
 
     def _vertices(self, point) -> np.ndarray:
@@ -147,6 +148,8 @@ class BeamProblem:
         psi = dolfinx.fem.Function(space, name="winding_angle")
         nodes = space.tabulate_dof_coordinates()[:, :3]
         maps = [np.asarray(m) for _, m in components]
+        # the rotation's components at the same nodes (the collapsed spaces share their layout)
+        rotation_maps = [np.asarray(self.model.W.sub(1).sub(i).collapse()[1]) for i in range(3)]
 
         def swept() -> np.ndarray:
             q = self.model.q.x.array
@@ -158,8 +161,23 @@ class BeamProblem:
             raw = self.committed_load - swept()
             psi.x.array[:] += (raw - psi.x.array + math.pi) % (2 * math.pi) - math.pi
 
+        def predict(load_from: float, load_to: float) -> None:
+            # the wound nodes (a radian behind the lift-off) turn with the hub as a rigid body:
+            # without it Newton has to carry the whole coil round, and fails as nodes meet the
+            # obstacle
+            wound = psi.x.array < load_from - 1.0
+            if not wound.any():
+                return
+            q = self.model.q.x.array
+            p = nodes[wound] + np.column_stack([q[m[wound]] for m in maps]) - centre
+            moved = p @ rotation_matrix(a, load_to - load_from).T + centre - nodes[wound]
+            for i in range(3):
+                q[maps[i][wound]] = moved[:, i]
+                q[rotation_maps[i][wound]] += (load_to - load_from) * a[i]
+
         psi.x.array[:] = self.committed_load - swept()
         self._winding.append(update)
+        self._predictors.append(predict)
         d = ufl.SpatialCoordinate(self.mesh) + self.model.u - ufl.as_vector(centre.tolist())
         av = ufl.as_vector(a.tolist())
         radial = d - ufl.dot(d, av) * av
@@ -175,6 +193,10 @@ class BeamProblem:
             u_values.x.array[:] = np.tile(u, len(u_values.x.array) // 3)
             increment = (value - self.committed_load) * axis  # the rotation since the last accepted step
             theta_values.x.array[:] = np.tile(increment, len(theta_values.x.array) // 3)
+
+    def _predict(self, load_from: float, load_to: float) -> None:
+        for predict in self._predictors:
+            predict(load_from, load_to)
 
     def _commit(self) -> None:
         self.model.commit()
@@ -229,6 +251,7 @@ class BeamProblem:
             control=control,
             commit=self._commit,
             on_step=on_step,
+            predict=self._predict if self._predictors else None,
         )
         try:
             self.history += continuation.run(self.committed_load, load_end)
