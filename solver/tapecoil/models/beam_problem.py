@@ -133,7 +133,9 @@ class BeamProblem:
         sense from ``reference`` (a direction from the axis: the root's at load 0). It is read
         from the state after every accepted step and unwrapped continuously (a node moves less
         than half a turn a step), so the nodes of successive turns keep their turn; within a
-        step it is held, and the obstacle's force is radial. Returns psi (at the line's nodes).
+        step it is held, and the obstacle's force is radial. Each step starts with the nodes
+        wound more than a radian behind the lift-off turned about the axis by the step of the
+        load parameter, as a rigid body with the hub. Returns psi (at the line's nodes).
         """
         if not (math.isfinite(penalty) and penalty > 0):
             raise ValueError(f"winding contact: the penalty must be a positive number, got {penalty!r}")
