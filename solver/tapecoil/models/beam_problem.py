@@ -145,13 +145,13 @@ class BeamProblem:
         e0 = np.asarray(reference, dtype=float)
         e0 = e0 - np.dot(e0, a) * a
         e0 = e0 / np.linalg.norm(e0)
-        components = [self.model.W.sub(0).sub(i).collapse() for i in range(3)]
+        components = [compat.collapse(self.model.W.sub(0).sub(i)) for i in range(3)]
         space = components[0][0]
         psi = dolfinx.fem.Function(space, name="winding_angle")
         nodes = space.tabulate_dof_coordinates()[:, :3]
-        maps = [np.asarray(m) for _, m in components]
+        maps = [m for _, m in components]
         # the rotation's components at the same nodes (the collapsed spaces share their layout)
-        rotation_maps = [np.asarray(self.model.W.sub(1).sub(i).collapse()[1]) for i in range(3)]
+        rotation_maps = [compat.collapse(self.model.W.sub(1).sub(i))[1] for i in range(3)]
 
         def swept() -> np.ndarray:
             q = self.model.q.x.array
