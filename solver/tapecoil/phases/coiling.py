@@ -55,7 +55,7 @@ class CoilingModel:
     ``tape``: an existing tape on its hub (a checkpoint's); otherwise one is built from
     ``config`` (or ``resolution``). The free end is pulled by the force T (``coiling.tension``).
     ``obstacles``: further rigid bodies turned with the hub, each with a penalty ``energy`` (UFL)
-    and ``turn(hub_angle)`` (the seeds of :mod:`tapecoil.hub.seeds`).
+    and ``turn(hub_angle)`` (the temporary cylinders of tools/seeded_wrap_study.py).
     """
 
     def __init__(

@@ -158,6 +158,24 @@ def beam_bend45(elements: int, comm=MPI.COMM_WORLD, load_step: float = 0.1) -> C
     )
 
 
+STRIP_DEPTH = 0.003  # [m]: the wound strip's thickness, and the step from turn to turn
+
+
+def _strip_on_hub(elements: int, length: float, rho: float, comm, name: str) -> tuple:
+    """A steel strip (30 x 3 mm, ``length`` [m]) along x, its root clamped to a hub whose axis
+    lies ``rho`` below its line and turns with the load parameter, its end held on the guide
+    through it and pulled by T = EI/rho^2 (constant): the problem, the section, T, the axis
+    point and the axis (turning about -y winds the strip on from the top)."""
+    section = BeamSection.rectangle(E=2e11, nu=0.3, width=0.03, depth=STRIP_DEPTH)
+    pull = section.EI2 / rho**2
+    problem = BeamProblem(straight_line, length, elements, section, fixed_frame, comm=comm, name=name)
+    centre, axis = (0.0, 0.0, -rho), (0.0, -1.0, 0.0)
+    problem.clamp((0, 0, 0), turning_about=(centre, axis))
+    problem.hold((length, 0, 0), (1, 2))
+    problem.end_load((length, 0, 0), force=(pull, 0, 0), constant=True)
+    return problem, section, pull, centre, axis
+
+
 def beam_hub(elements: int, comm=MPI.COMM_WORLD, wrap: float = 1.5 * math.pi) -> CaseResult:
     """A steel strip (30 x 3 mm, 1 m) wound by ``wrap`` [rad] onto a hub whose axis lies
     rho = 50 mm below its line, under a pull T = EI/rho^2 (twice the balance's T - N) held
@@ -169,16 +187,8 @@ def beam_hub(elements: int, comm=MPI.COMM_WORLD, wrap: float = 1.5 * math.pi) ->
     root): N = EA Gamma_1, its spread, and the curvature.
     """
     rho, length = 0.05, 1.0
-    section = BeamSection.rectangle(E=2e11, nu=0.3, width=0.03, depth=0.003)
+    problem, section, pull, centre, axis = _strip_on_hub(elements, length, rho, comm, "verify_beam")
     balance = section.EI2 / (2 * rho**2)
-    pull = 2 * balance
-    problem = BeamProblem(
-        straight_line, length, elements, section, fixed_frame, comm=comm, name="verify_beam"
-    )
-    centre, axis = (0.0, 0.0, -rho), (0.0, -1.0, 0.0)  # turning about -y winds the strip on from the top
-    problem.clamp((0, 0, 0), turning_about=(centre, axis))
-    problem.hold((length, 0, 0), (1, 2))
-    problem.end_load((length, 0, 0), force=(pull, 0, 0), constant=True)
     problem.hub_contact(centre, axis, rho, penalty=1e10)
     history = problem.solve(wrap, first_step=0.05 / wrap, max_step=0.1 / wrap)
     x, N = problem.axial_force()
@@ -213,16 +223,9 @@ def beam_turns(elements: int, comm=MPI.COMM_WORLD, turns: int = 3) -> CaseResult
     root; the read-out keeps clear of the climbs, where the radial contact force has a component
     along the steep line.
     """
-    rho, length, depth = 0.05, 1.8, 0.003
-    section = BeamSection.rectangle(E=2e11, nu=0.3, width=0.03, depth=depth)
-    pull = section.EI2 / rho**2
-    problem = BeamProblem(
-        straight_line, length, elements, section, fixed_frame, comm=comm, name="verify_beam_turns"
-    )
-    centre, axis = (0.0, 0.0, -rho), (0.0, -1.0, 0.0)
-    problem.clamp((0, 0, 0), turning_about=(centre, axis))
-    problem.hold((length, 0, 0), (1, 2))
-    problem.end_load((length, 0, 0), force=(pull, 0, 0), constant=True)
+    rho, length = 0.05, 1.8
+    problem, section, pull, centre, axis = _strip_on_hub(elements, length, rho, comm, "verify_beam_turns")
+    depth = STRIP_DEPTH
     psi = problem.winding_contact(
         centre,
         axis,
