@@ -62,6 +62,34 @@ class PointForce:
     magnitude: object
 
 
+def assemble_residual(b, F_form, J_form, bcs, q, terms=(), point_forces=(), extra=None) -> None:
+    """The residual F(q) into b: Dirichlet conditions by lifting (the residual on a constrained
+    dof is q - g), then the assembled terms' parts, the point forces (residual = internal -
+    external) and ``extra(owned local array)``, before the constrained rows are set."""
+    with b.localForm() as b_local:
+        b_local.set(0.0)
+    dolfinx.fem.petsc.assemble_vector(b, F_form)
+    dolfinx.fem.petsc.apply_lifting(b, [J_form], bcs=[bcs], x0=[q.x.petsc_vec], alpha=-1.0)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    for term in terms:
+        term.add_residual(b)
+    with b.localForm() as b_local:
+        for force in point_forces:
+            b_local.array[force.dofs] -= force.magnitude.value
+        if extra is not None:
+            extra(b_local.array)
+    dolfinx.fem.petsc.set_bc(b, bcs, q.x.petsc_vec, -1.0)
+
+
+def assemble_jacobian(A, J_form, bcs, terms=()) -> list:
+    """The Jacobian's forms into A (zeroed first; Dirichlet rows and columns set) and the
+    terms' parts; A is left for its caller to assemble. Returns the terms' answers to whether
+    they widened A's pattern."""
+    A.zeroEntries()
+    compat.assemble_matrix(A, J_form, bcs)
+    return [term.add_jacobian(A) for term in terms]
+
+
 class SNESSolver:
     """Newton (PETSc SNES) for F(q) = 0 with Jacobian J and Dirichlet conditions ``bcs``.
 
@@ -129,17 +157,7 @@ class SNESSolver:
     def _residual(self, _snes, x, b) -> None:
         t0 = time.perf_counter()
         self._update_state(x)
-        with b.localForm() as b_local:
-            b_local.set(0.0)
-        dolfinx.fem.petsc.assemble_vector(b, self.F_form)
-        dolfinx.fem.petsc.apply_lifting(b, [self.J_form], bcs=[self.bcs], x0=[self.q.x.petsc_vec], alpha=-1.0)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        for term in self.terms:
-            term.add_residual(b)
-        with b.localForm() as b_local:
-            for force in self.point_forces:
-                b_local.array[force.dofs] -= force.magnitude.value  # residual = internal - external
-        dolfinx.fem.petsc.set_bc(b, self.bcs, self.q.x.petsc_vec, -1.0)
+        assemble_residual(b, self.F_form, self.J_form, self.bcs, self.q, self.terms, self.point_forces)
         self.timings["residual"] += time.perf_counter() - t0
 
     def _jacobian(self, _snes, x, J, P) -> None:
@@ -147,9 +165,7 @@ class SNESSolver:
         t0 = time.perf_counter()
         self._update_state(x)
         A = P
-        A.zeroEntries()
-        compat.assemble_matrix(A, self.J_form, self.bcs)
-        widened = [term.add_jacobian(A) for term in self.terms]
+        widened = assemble_jacobian(A, self.J_form, self.bcs, self.terms)
         A.assemble()
         if J.handle != P.handle:
             J.assemble()

@@ -79,7 +79,9 @@ class Continuation:
 
     solve: Callable[[], object]
     set_load: Callable[[float], None]
-    state: object  # the dolfinx Function solved for
+    # the dolfinx Function solved for, or an object with snapshot() and restore(saved) (the
+    # states of a coupled solve, :class:`~tapecoil.core.coupled_newton.JointState`)
+    state: object
     control: StepControl
     relaxation: Relaxation | None = None
     on_step: Callable[[StepRecord], None] | None = None
@@ -96,6 +98,18 @@ class Continuation:
     commit: Callable[[], None] | None = None
     easy_iterations: int = 5
     history: list[StepRecord] = field(default_factory=list)
+
+    def _snapshot(self):
+        """A copy of the state (a Function's local array, or what a joint state's ``snapshot`` gives)."""
+        take = getattr(self.state, "snapshot", None)
+        return take() if take is not None else self.state.x.array.copy()
+
+    def _restore(self, saved) -> None:
+        restore = getattr(self.state, "restore", None)
+        if restore is not None:
+            restore(saved)
+        else:
+            self.state.x.array[:] = saved
 
     def _relax(self, target: float) -> tuple[bool, int]:
         """Pseudo-transient solves at the fixed load ``target``; True when back at equilibrium.
@@ -157,7 +171,7 @@ class Continuation:
         )
         t = t_start
         dt = ctl.initial_step * span if first_step is None else first_step
-        saved = self.state.x.array.copy()
+        saved = self._snapshot()
         cutbacks = rejected = 0
         # cut-backs of the steps accepted since the last one that needed none
         limping = 0
@@ -173,7 +187,7 @@ class Continuation:
             iterations, relaxed = result.iterations, False
             refused = self.refusal() if (result.converged and self.refusal is not None) else None
             if not result.converged or refused is not None:
-                self.state.x.array[:] = saved
+                self._restore(saved)
                 cutbacks += 1
                 dt *= ctl.cutback
                 # creeping towards a snap, or towards a load no step reaches without refusal
@@ -192,7 +206,7 @@ class Continuation:
                     )
                 ok, iterations = self._relax(target)
                 if not ok:
-                    self.state.x.array[:] = saved
+                    self._restore(saved)
                     self.set_load(t)
                     # a shorter step lands nearer the snap's turning point, from where the
                     # relaxation has less far to go: cut back again while the step allows
@@ -207,7 +221,7 @@ class Continuation:
             step = target - t
             error = None if (self.error is None or relaxed) else self.error()
             if error is not None and error > 1.0 and abs(step) > ctl.min_step * abs(span):
-                self.state.x.array[:] = saved
+                self._restore(saved)
                 rejected += 1
                 dt = step * max(ctl.min_step * abs(span) / abs(step), self._error_factor(error))
                 continue
@@ -216,7 +230,7 @@ class Continuation:
             t = target
             if self.commit is not None:
                 self.commit()
-            saved[:] = self.state.x.array
+            saved = self._snapshot()
             easy = iterations <= self.easy_iterations and cutbacks == 0
             if error is None:
                 if easy:

@@ -219,7 +219,8 @@ class GeometricallyExactBeam:
         cells = np.arange(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
         values = expression.eval(self.mesh, cells)
         n_points = len(compat.interpolation_points(self.frame_n.function_space))
-        return values.reshape(len(cells), n_points, -1)
+        size = int(np.prod(expression.ufl_expression.ufl_shape))  # a rank may hold no cell
+        return values.reshape(len(cells), n_points, size)
 
     def rounding_scale(self):
         """What each state component is added to, for the solver's round-off floor: a displacement

@@ -187,6 +187,13 @@ class BeamProblem:
         self.energy_terms.append(0.5 * penalty * penetration**2 * self.model.dx)
         return psi
 
+    def forms(self) -> tuple:
+        """The residual and Jacobian (UFL) of the beam's energy and the energies beside it."""
+        model = self.model
+        energy = model.energy + sum(self.energy_terms)
+        residual = ufl.derivative(energy, model.q, model.dq)
+        return residual, ufl.derivative(residual, model.q, ufl.TrialFunction(model.W))
+
     def _set_load(self, value: float) -> None:
         self.load.value = value
         for u_values, theta_values, point, centre, axis in self._turning:
@@ -230,9 +237,7 @@ class BeamProblem:
         from tapecoil.config import StepControl
 
         model = self.model
-        energy = model.energy + sum(self.energy_terms)
-        residual = ufl.derivative(energy, model.q, model.dq)
-        jacobian = ufl.derivative(residual, model.q, ufl.TrialFunction(model.W))
+        residual, jacobian = self.forms()
         solver = SNESSolver(
             residual,
             jacobian,

@@ -30,7 +30,7 @@ from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
 from tapecoil.geometry.meshes import XI1_MAX, XI1_MIN, XI2_MAX, XI2_MIN, MeshResolution, create_strip_mesh
 from tapecoil.geometry.surfaces import Surface
-from tapecoil.models.edges import clamp
+from tapecoil.models.edges import EdgeMotion, clamp
 from tapecoil.models.shell import NaghdiShell, ShellMaterial
 from tapecoil.models.supports import fixed_point, symmetry_plane
 
@@ -41,7 +41,8 @@ class ShellProblem:
     """A Naghdi shell (:class:`NaghdiShell`, Q2, PSRI by default) on ``surface``, meshed at
     ``resolution``, with supports and loads added by the methods below before :meth:`solve`.
 
-    ``name``: the PETSc options prefix of its solver is ``name + "_"`` (``-name_snes_monitor``).
+    ``name``: the PETSc options prefix of its solver is ``name + "_"`` (``-name_snes_monitor``);
+    ``director_frame``: the director's frame, ``"global"`` for tapes (see :mod:`~tapecoil.models.shell`).
     """
 
     def __init__(
@@ -53,16 +54,18 @@ class ShellProblem:
         comm=MPI.COMM_WORLD,
         technology: str = "psri",
         name: str = "shell",
+        director_frame: str = "local",
     ):
         surface.check()
         self.surface = surface
         self.strip = create_strip_mesh(comm, surface, resolution)
-        self.model = NaghdiShell(self.strip, material, technology)
+        self.model = NaghdiShell(self.strip, material, technology, director_frame=director_frame)
         self.name = name
         self.load = dolfinx.fem.Constant(self.strip.mesh, 0.0)  # lambda, the load parameter
         self.bcs: list = []
         self.work_per_load = None  # UFL form: the external work of the loads per unit lambda
         self.point_forces: list[PointForce] = []
+        self._motions: list[EdgeMotion] = []  # edges turned by the load parameter
         self.wall_time = 0.0  # of the last solve [s]
 
     # --- where things are
@@ -93,6 +96,21 @@ class ShellProblem:
     def clamp(self, edge: str) -> None:
         """The edge held: zero displacement and rotation."""
         self.bcs += clamp(self.model, self.edge(edge)).bcs
+
+    def turn(self, edge: str, axis, axis_point) -> None:
+        """The edge held, turned rigidly by the load parameter [rad] about the line through
+        ``axis_point`` along ``axis`` [m] (a clamp on a turning hub)."""
+        motion = EdgeMotion(
+            self.model, self.edge(edge), np.asarray(axis, dtype=float), np.asarray(axis_point, dtype=float)
+        )
+        self.bcs += motion.bcs
+        self._motions.append(motion)
+
+    def set_load(self, value: float) -> None:
+        """The load parameter lambda, and the turned edges' angles with it."""
+        self.load.value = value
+        for motion in self._motions:
+            motion.set(value)
 
     def symmetry_plane(self, edge: str, normal) -> None:
         """The edge lies on a plane of symmetry with unit ``normal`` (+-x, +-y or +-z): see
@@ -135,6 +153,12 @@ class ShellProblem:
         self._add_work(float(moment) * m.theta[angle] * self._line_element(edge) * m.ds(self.edge(edge)))
 
     # --- solve and measure
+    def forms(self) -> tuple:
+        """The residual and Jacobian (UFL) of the shell under its loads at the load parameter."""
+        work = None if self.work_per_load is None else self.load * self.work_per_load
+        F = self.model.residual(work)
+        return F, self.model.jacobian_form(F)
+
     def solve(
         self,
         load: float,
@@ -163,11 +187,10 @@ class ShellProblem:
                 f"<= load ({load})"
             )
         settings = solver_config or SolverConfig()
-        work = None if self.work_per_load is None else self.load * self.work_per_load
-        F = self.model.residual(work)
+        F, J = self.forms()
         solver = SNESSolver.from_config(
             F,
-            self.model.jacobian_form(F),
+            J,
             self.model.q,
             self.bcs,
             settings,
@@ -181,12 +204,9 @@ class ShellProblem:
             initial_step=first_step / load, max_step=max_step / load, min_step=smallest / load
         )
 
-        def set_load(value: float) -> None:
-            self.load.value = value
-
         t0 = time.perf_counter()
         try:
-            return Continuation(solver.solve, set_load, self.model.q, control, on_step=on_step).run(
+            return Continuation(solver.solve, self.set_load, self.model.q, control, on_step=on_step).run(
                 0.0, load, stops
             )
         finally:

@@ -16,4 +16,5 @@ CASES = (
     "beam-bend45",
     "beam-hub",
     "beam-turns",
+    "hybrid-cantilever",
 )

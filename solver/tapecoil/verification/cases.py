@@ -1,4 +1,5 @@
-"""Verification cases of the shell core and the beam, each returning computed values against references.
+"""Verification cases of the shell core, the beam and the hybrid, each returning computed values
+against references.
 
 The CLI (``tapecoil verify``) and the tests run the same functions.
 """
@@ -21,6 +22,7 @@ from tapecoil.verification.beam import (
     beam_turns,
 )
 from tapecoil.verification.checks import CaseResult
+from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
     ROLLUP_MESHES,
@@ -71,6 +73,9 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = beam_hub(HUB_MESHES[preset], comm=comm)
     elif name == "beam-turns":
         result = beam_turns(TURNS_MESHES[preset], comm=comm)
+    elif name == "hybrid-cantilever":
+        resolution = MeshResolution.from_config(MeshConfig(preset=preset), CANTILEVER_LENGTH)
+        result = hybrid_cantilever(config, resolution, comm=comm)
     else:
         result = tape_fold(config, tape_res, comm=comm)
     result.info["preset"] = preset

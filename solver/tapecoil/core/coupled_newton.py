@@ -1,0 +1,351 @@
+"""Newton (PETSc SNES) over two DOLFINx problems on two meshes, joined through a few dofs.
+
+Two problems, each a residual form, its Jacobian, a state and Dirichlet conditions
+(:class:`Block`), are solved as one: the unknowns of both in one vector, one Jacobian factorised
+by MUMPS. They are joined by an energy E(q0, c) stated on the first problem's mesh, whose
+parameters c are a few dofs of the second problem's state (:class:`DofCoupling`: a shell's edge
+tied to a beam's end node, whose six dofs are c). E's derivatives in q0 join the first block's
+forms; its derivatives in c are assembled as n scalars, n vectors on the first space and an
+n x n matrix (UFL differentiates E with respect to c as a variable), and placed in the second
+block's rows and in the off-diagonal blocks. The joint matrix is a PETSc MATNEST of the four
+blocks converted to AIJ, so that no form couples the two meshes and the same code serves
+DOLFINx 0.9 to 0.11 (whose block assembly differs).
+
+The flat numbering is PETSc's for a MATNEST: each rank's rows of the first block, then its rows
+of the second.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from tapecoil.core import compat
+from tapecoil.core.convergence import ResidualTest
+from tapecoil.core.newton import SolveResult, assemble_residual
+from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix, options_in_database
+
+__all__ = ["Block", "CoupledSNESSolver", "DofCoupling", "JointState"]
+
+
+@dataclass
+class Block:
+    """One problem of a coupled solve: residual F and Jacobian J (UFL forms) of the state q,
+    Dirichlet conditions, point forces (:class:`~tapecoil.core.newton.PointForce`) and the state
+    scale of the round-off floor (a Function of q's space, or None)."""
+
+    F: object
+    J: object
+    q: dolfinx.fem.Function
+    bcs: list = field(default_factory=list)
+    point_forces: list = field(default_factory=list)
+    state_scale: dolfinx.fem.Function | None = None
+
+
+def _owned_size(V) -> int:
+    return V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+
+
+class DofCoupling:
+    """An energy E(q0, c) on the first block's mesh whose parameters c (n values) are dofs of the
+    second block's state q1.
+
+    ``dofs``: for each component of c, its index in q1's local dof array on the rank that owns it
+    and -1 elsewhere (each component owned by exactly one rank). Build E with :attr:`variable`
+    for c, then :meth:`set_energy`. Collective.
+    """
+
+    def __init__(self, mesh0, q1: dolfinx.fem.Function, dofs):
+        dofs = np.asarray(dofs, dtype=np.int64)
+        V1 = q1.function_space
+        comm = V1.mesh.comm
+        owned = dofs >= 0
+        if np.any(dofs[owned] >= _owned_size(V1)):
+            raise ValueError("coupling: a dof given as owned is a ghost on this rank")
+        counts = comm.allreduce(owned.astype(int), op=MPI.SUM)
+        if np.any(counts != 1):
+            raise ValueError(
+                f"coupling: each coupled dof must be owned by one rank, counts {counts.tolist()}"
+            )
+        bs = V1.dofmap.index_map_bs
+        mine = np.zeros(len(dofs), dtype=np.int64)
+        if owned.any():  # a rank may hold none of the second block's dofs
+            blocks = V1.dofmap.index_map.local_to_global((dofs[owned] // bs).astype(np.int32))
+            mine[owned] = blocks * bs + dofs[owned] % bs
+        self.q1 = q1
+        self.dofs = dofs
+        self.owned = owned
+        self.global_dofs = comm.allreduce(mine, op=MPI.SUM).astype(PETSc.IntType)
+        self.c = dolfinx.fem.Constant(mesh0, np.zeros(len(dofs)))
+        self.variable = ufl.variable(self.c)
+        self.comm = comm
+        self.cells = np.zeros(0, dtype=np.int32)
+
+    def set_energy(self, density, measure, q0: dolfinx.fem.Function, cells) -> None:
+        """E = integral of ``density`` (UFL, in q0 and :attr:`variable`) with ``measure``, whose
+        integration entities lie in the (local) ``cells`` of q0's mesh."""
+        n = len(self.dofs)
+        self.cells = np.asarray(cells, dtype=np.int32)
+        V0 = q0.function_space
+        energy = density * measure
+        self.residual0 = ufl.derivative(energy, q0, ufl.TestFunction(V0))
+        self.jacobian0 = ufl.derivative(self.residual0, q0, ufl.TrialFunction(V0))
+        gradient = ufl.diff(density, self.variable)
+        hessian = ufl.diff(gradient, self.variable)
+        self._gradient = [dolfinx.fem.form(gradient[i] * measure) for i in range(n)]
+        self._mixed = [
+            dolfinx.fem.form(ufl.derivative(gradient[i] * measure, q0, ufl.TestFunction(V0)))
+            for i in range(n)
+        ]
+        self._hessian = {
+            (i, j): dolfinx.fem.form(hessian[i, j] * measure) for i in range(n) for j in range(i, n)
+        }
+        self.energy = dolfinx.fem.form(energy)
+
+    def read(self) -> None:
+        """c from q1's current values (collective)."""
+        values = np.zeros(len(self.dofs))
+        values[self.owned] = self.q1.x.array[self.dofs[self.owned]]
+        self.c.value[:] = self.comm.allreduce(values, op=MPI.SUM)
+
+    def _scalar(self, form) -> float:
+        return self.comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
+
+    def gradient(self) -> np.ndarray:
+        """dE/dc (n,), on every rank (collective)."""
+        return np.array([self._scalar(f) for f in self._gradient])
+
+    def hessian(self) -> np.ndarray:
+        """d2E/dc2 (n, n), on every rank (collective)."""
+        n = len(self.dofs)
+        H = np.zeros((n, n))
+        for (i, j), form in self._hessian.items():
+            H[i, j] = H[j, i] = self._scalar(form)
+        return H
+
+    def mixed_vectors(self) -> list:
+        """d2E/(dq0 dc_j) for each j: PETSc vectors of q0's layout, owners' values summed."""
+        out = []
+        for form in self._mixed:
+            b = dolfinx.fem.petsc.assemble_vector(form)
+            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            out.append(b)
+        return out
+
+
+class JointState:
+    """The states of both blocks as one, for :class:`~tapecoil.core.stepping.Continuation`
+    (which saves a converged state and returns to it)."""
+
+    def __init__(self, *functions):
+        self.functions = functions
+
+    def snapshot(self) -> np.ndarray:
+        return np.concatenate([f.x.array for f in self.functions])
+
+    def restore(self, saved: np.ndarray) -> None:
+        start = 0
+        for f in self.functions:
+            n = len(f.x.array)
+            f.x.array[:] = saved[start : start + n]
+            start += n
+
+
+class CoupledSNESSolver:
+    """Newton for two :class:`Block` s joined by a :class:`DofCoupling` (see the module).
+
+    ``prefix``, ``options``, ``rtol``, ``atol``, ``max_it``: as
+    :class:`~tapecoil.core.newton.SNESSolver`'s; the command line's options under the prefix win.
+    """
+
+    def __init__(
+        self, blocks, coupling: DofCoupling, *, prefix, options=None, rtol=1e-8, atol=1e-10, max_it=25
+    ):
+        check_prefix(prefix)
+        if len(blocks) != 2:
+            raise ValueError(f"a coupled solve takes two blocks, got {len(blocks)}")
+        self.blocks = blocks
+        self.coupling = coupling
+        first, second = blocks
+        self.F_forms = [dolfinx.fem.form(first.F + coupling.residual0), dolfinx.fem.form(second.F)]
+        self.J_forms = [dolfinx.fem.form(first.J + coupling.jacobian0), dolfinx.fem.form(second.J)]
+        self.A = [dolfinx.fem.petsc.create_matrix(J) for J in self.J_forms]
+        self.b = [compat.create_vector(blk.q.function_space) for blk in blocks]
+        comm = first.q.function_space.mesh.comm
+        self.comm = comm
+        self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
+
+        # the rows of the first block that the coupling touches: the dofs of the cells its
+        # integrals see, found from the vectors' support once (their pattern is then fixed)
+        self._rows = self._coupled_rows()
+        n0, n1 = (_owned_size(blk.q.function_space) for blk in blocks)
+        N0, N1 = (
+            blk.q.function_space.dofmap.index_map.size_global * blk.q.function_space.dofmap.index_map_bs
+            for blk in blocks
+        )
+        c = len(coupling.dofs)
+        self.C = PETSc.Mat().createAIJ(((n0, N0), (n1, N1)), nnz=c, comm=comm)
+        self.C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        self.C.setUp()
+        self._fill_coupling_block(np.zeros((len(self._rows), c)))
+        self.CT = self.C.transpose(PETSc.Mat())  # without a target, petsc4py transposes in place
+        for A, J in zip(self.A, self.J_forms, strict=True):
+            A.zeroEntries()
+            compat.assemble_matrix(A, J, [])
+            A.assemble()
+        self._hessian_pattern()
+        nest = PETSc.Mat().createNest([[self.A[0], self.C], [self.CT, self.A[1]]], comm=comm)
+        self.index_sets = nest.getNestISs()[0]
+        self.J = nest.convert("aij", PETSc.Mat())  # without a target, petsc4py converts in place
+        nest.destroy()
+        self.x = self.J.createVecRight()
+        self.r = self.J.createVecRight()
+
+        scale = self.x.duplicate()
+        scale.set(0.0)
+        for blk, iset in zip(blocks, self.index_sets, strict=True):
+            if blk.state_scale is not None:
+                sub = scale.getSubVector(iset)
+                sub.array[:] = blk.state_scale.x.array[: sub.getLocalSize()]
+                scale.restoreSubVector(iset, sub)
+        self.convergence = ResidualTest(scale.array.copy())
+        scale.destroy()
+
+        self.prefix = prefix
+        self.options = {**DEFAULT_PETSC_OPTIONS, **(options or {})}
+        self.snes = PETSc.SNES().create(comm)
+        self.snes.setOptionsPrefix(prefix)
+        self.snes.setFunction(self._residual, self.r)
+        self.snes.setJacobian(self._jacobian, self.J)
+        self.snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
+        self.convergence.install(self.snes)
+        with options_in_database(self.prefix, self.options):
+            self.snes.setFromOptions()
+            self.snes.getKSP().setFromOptions()
+        self.snes.setErrorIfNotConverged(False)
+
+    # --- the coupling's blocks
+    def _coupled_rows(self) -> np.ndarray:
+        """Owned, unconstrained rows of the first block that the coupling's integrals touch."""
+        V0 = self.blocks[0].q.function_space
+        cells = np.asarray(self.coupling.cells, dtype=np.int32)
+        dofs = np.unique(np.asarray(V0.dofmap.list)[cells].reshape(-1))
+        bs = V0.dofmap.index_map_bs
+        rows = (dofs[:, None] * bs + np.arange(bs)).reshape(-1)
+        rows = rows[rows < _owned_size(V0)]
+        constrained = [bc.dof_indices()[0] for bc in self.blocks[0].bcs]
+        return np.setdiff1d(rows, np.concatenate(constrained) if constrained else []).astype(PETSc.IntType)
+
+    def _fill_coupling_block(self, values: np.ndarray) -> None:
+        """C[rows, coupled dofs] = values (rows, n); rows are owned, local to the first block."""
+        start = self.C.getOwnershipRange()[0]
+        self.C.zeroEntries()
+        cols = self.coupling.global_dofs
+        for row, line in zip(self._rows, values, strict=True):
+            self.C.setValues([start + row], cols, line, addv=PETSc.InsertMode.INSERT_VALUES)
+        self.C.assemble()
+
+    def _hessian_pattern(self) -> None:
+        """Make sure the second block's matrix holds the coupled dofs' n x n entries."""
+        self._add_hessian(np.zeros((len(self.coupling.dofs),) * 2))
+        self.A[1].assemble()
+
+    def _add_hessian(self, H: np.ndarray) -> None:
+        cp = self.coupling
+        A = self.A[1]
+        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        rows = cp.global_dofs[cp.owned]
+        if len(rows):
+            A.setValues(rows, cp.global_dofs, H[cp.owned], addv=PETSc.InsertMode.ADD_VALUES)
+
+    # --- SNES callbacks
+    def _update_states(self, x) -> None:
+        for blk, iset in zip(self.blocks, self.index_sets, strict=True):
+            sub = x.getSubVector(iset)
+            qv = blk.q.x.petsc_vec
+            qv.array[:] = sub.array_r
+            x.restoreSubVector(iset, sub)
+            qv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self.coupling.read()
+
+    def _write_states(self, x) -> None:
+        for blk, iset in zip(self.blocks, self.index_sets, strict=True):
+            sub = x.getSubVector(iset)
+            sub.array[:] = blk.q.x.petsc_vec.array_r
+            x.restoreSubVector(iset, sub)
+
+    def _residual(self, _snes, x, r) -> None:
+        t0 = time.perf_counter()
+        self._update_states(x)
+        cp = self.coupling
+        gradient = cp.gradient()
+        for k, (blk, b) in enumerate(zip(self.blocks, self.b, strict=True)):
+            extra = None
+            if k == 1:
+
+                def extra(local, g=gradient):
+                    local[cp.dofs[cp.owned]] += g[cp.owned]
+
+            assemble_residual(
+                b, self.F_forms[k], self.J_forms[k], blk.bcs, blk.q, [], blk.point_forces, extra
+            )
+            sub = r.getSubVector(self.index_sets[k])
+            sub.array[:] = b.array_r
+            r.restoreSubVector(self.index_sets[k], sub)
+        self.timings["residual"] += time.perf_counter() - t0
+
+    def _jacobian(self, _snes, x, J, P) -> None:
+        t0 = time.perf_counter()
+        self._update_states(x)
+        cp = self.coupling
+        for k, blk in enumerate(self.blocks):
+            self.A[k].zeroEntries()
+            compat.assemble_matrix(self.A[k], self.J_forms[k], blk.bcs)
+        self.A[0].assemble()
+        self.A[1].assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
+        self.A[1].assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        self._add_hessian(cp.hessian())
+        self.A[1].assemble()
+        vectors = cp.mixed_vectors()
+        values = (
+            np.column_stack([v.array_r[self._rows] for v in vectors])
+            if len(self._rows)
+            else np.zeros((0, len(vectors)))
+        )
+        for v in vectors:
+            v.destroy()
+        self._fill_coupling_block(values)
+        self.C.transpose(self.CT)
+        nest = PETSc.Mat().createNest([[self.A[0], self.C], [self.CT, self.A[1]]], comm=self.comm)
+        nest.convert("aij", out=P)
+        nest.destroy()
+        if J.handle != P.handle:
+            J.assemble()
+        self.convergence.update_floor(P, x)
+        self.timings["jacobian"] += time.perf_counter() - t0
+
+    def solve(self) -> SolveResult:
+        """Solve from the current states; on failure they hold the last iterate."""
+        self._write_states(self.x)
+        t0 = time.perf_counter()
+        with options_in_database(self.prefix, self.options):
+            self.snes.solve(None, self.x)
+        self.timings["solve"] += time.perf_counter() - t0
+        self.timings["iterations"] += self.snes.getIterationNumber()
+        reason = self.snes.getConvergedReason()
+        norm = self.snes.getFunctionNorm()
+        converged = reason > 0 and np.isfinite(norm)
+        if converged:
+            self._update_states(self.x)
+        return SolveResult(converged, self.snes.getIterationNumber(), reason, float(norm))
+
+    def destroy(self) -> None:
+        for obj in (self.snes, self.J, self.C, self.CT, self.x, self.r, *self.A, *self.b):
+            obj.destroy()

@@ -1,0 +1,133 @@
+"""A shell and a beam joined end to end and solved as one (:class:`HybridProblem`): the shell
+where the section deforms, the beam where it keeps its shape.
+
+Each part is stated as its own benchmark is (a :class:`~tapecoil.models.problem.ShellProblem`
+and a :class:`~tapecoil.models.beam_problem.BeamProblem`: supports, loads, contact); the shell's
+edge ``xi1_max`` is tied to a beam node as a rigid section
+(:class:`~tapecoil.models.interface.RigidSectionTie`), and one Newton solve
+(:class:`~tapecoil.core.coupled_newton.CoupledSNESSolver`) steps the load parameter shared by
+both::
+
+    shell = ShellProblem(StripGeometry(R, b, window), resolution, material, director_frame="global")
+    shell.clamp("xi1_min")
+    beam = BeamProblem(line, length - window, elements, BeamSection.circular_arc(...), frame)
+    beam.end_load(tip, force=(0, 0, 1))
+    hybrid = HybridProblem(shell, beam, beam_end=start_of_beam, modulus=E)
+    hybrid.solve(P, first_step=P / 4, max_step=P)
+"""
+
+from __future__ import annotations
+
+import time
+
+from tapecoil.config import SolverConfig
+from tapecoil.core.coupled_newton import Block, CoupledSNESSolver, JointState
+from tapecoil.core.stepping import Continuation, StepRecord
+from tapecoil.models.interface import RigidSectionTie
+
+__all__ = ["HybridProblem"]
+
+
+class HybridProblem:
+    """The shell problem ``shell`` with its edge ``xi1_max`` tied to the node ``beam_end`` [m] of
+    the beam problem ``beam``, penalty factor ``penalty`` (:class:`RigidSectionTie`), the wall's
+    in-plane modulus ``modulus`` [Pa]. ``name``: the PETSc options prefix is ``name + "_"``."""
+
+    def __init__(self, shell, beam, beam_end, *, modulus: float, penalty: float = 1e3, name: str = "hybrid"):
+        self.shell, self.beam, self.name = shell, beam, name
+        strip = shell.strip
+        (x0, x1), _ = shell.surface.xi_range
+        # the edge's element length: the strip's last element along xi_1 (graded meshes differ)
+        element_length = strip.resolution.element_lengths(x1 - x0)[1]
+        self.tie = RigidSectionTie(
+            shell.model,
+            shell.edge("xi1_max"),
+            beam.model,
+            beam_end,
+            element_length=element_length,
+            modulus=modulus,
+            penalty=penalty,
+        )
+        self.history: list[StepRecord] = []
+        self.wall_time = 0.0
+
+    def _set_load(self, value: float) -> None:
+        self.shell.set_load(value)
+        self.beam._set_load(value)
+
+    def _commit(self) -> None:
+        self.tie.commit()  # reads the end's rotation increment before the beam sets it to zero
+        self.beam._commit()
+
+    def solve(
+        self,
+        load: float,
+        *,
+        first_step: float,
+        max_step: float,
+        min_step: float | None = None,
+        on_step=None,
+        solver_config: SolverConfig | None = None,
+        options: dict | None = None,
+    ) -> list[StepRecord]:
+        """Step the load parameter from where it is to ``load`` (adaptive, with cut-back), steps
+        in the parameter's units; raises :class:`~tapecoil.core.stepping.ContinuationError` with
+        the last converged state kept when no step converges."""
+        start = self.beam.committed_load
+        span = load - start
+        if span == 0 or not 0 < first_step <= max_step <= abs(span):
+            raise ValueError(
+                f"hybrid solve: steps must satisfy 0 < first_step ({first_step}) <= max_step "
+                f"({max_step}) <= |load - start| ({abs(span)})"
+            )
+        settings = solver_config or SolverConfig()
+        F_s, J_s = self.shell.forms()
+        F_b, J_b = self.beam.forms()
+        blocks = [
+            Block(
+                F_s,
+                J_s,
+                self.shell.model.q,
+                self.shell.bcs,
+                self.shell.point_forces,
+                self.shell.model.rounding_scale(),
+            ),
+            Block(
+                F_b,
+                J_b,
+                self.beam.model.q,
+                self.beam.bcs,
+                self.beam.point_forces,
+                self.beam.model.rounding_scale(),
+            ),
+        ]
+        solver = CoupledSNESSolver(
+            blocks,
+            self.tie.coupling,
+            prefix=f"{self.name}_",
+            options={**settings.petsc_options, **(options or {})},
+            rtol=settings.rtol,
+            atol=settings.atol,
+            max_it=settings.max_newton,
+        )
+        smallest = 1e-6 * abs(span) if min_step is None else min_step
+        control = settings.control(
+            initial_step=first_step / abs(span), max_step=max_step / abs(span), min_step=smallest / abs(span)
+        )
+        continuation = Continuation(
+            solve=solver.solve,
+            set_load=self._set_load,
+            state=JointState(self.shell.model.q, self.beam.model.q),
+            control=control,
+            commit=self._commit,
+            on_step=on_step,
+            predict=self.beam._predict if self.beam._predictors else None,
+        )
+        t0 = time.perf_counter()
+        try:
+            self.history += continuation.run(start, load)
+        finally:
+            self.wall_time = time.perf_counter() - t0
+            self.timings = dict(solver.timings)
+            solver.destroy()
+        return self.history
