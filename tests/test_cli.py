@@ -183,6 +183,15 @@ def test_a_verification_case_whose_solve_fails_is_reported_not_raised(monkeypatc
     assert main(["verify", "stress-free", "--json"]) == 0
 
 
+def test_verify_refuses_a_hybrid_case_on_a_laminated_tape(capsys):
+    """Refused before anything is built, with the reason; "all" skips those cases instead."""
+    from pathlib import Path
+
+    cfrp = str(Path(__file__).parents[1] / "demos" / "cfrp_tape.toml")
+    assert main(["verify", "hybrid-cantilever", cfrp]) == 2
+    assert "isotropic arc section" in capsys.readouterr().err
+
+
 SHORT_RUN = (
     "[tape]\nL = 0.1\n[coiling]\nhub_angle = 0.5\n[mesh]\npreset = 'coarse'\n"
     "[deployment]\nt_end = 0.003\nrelease_time = 0.0005\n[output]\nvtx_every = 2\ncheckpoint_every = 2\n"

@@ -1,15 +1,23 @@
 """The shell-beam hybrid: the coupled Newton solve, the rigid-section tie, the cantilever."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
-from tapecoil.config import Config, MeshConfig
+from tapecoil.config import Config, MeshConfig, load_config
 from tapecoil.core.dofs import global_scalar
 from tapecoil.geometry.meshes import MeshResolution
-from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_cantilever_problem
+from tapecoil.verification.hybrid import (
+    CANTILEVER_LENGTH,
+    FOLD_WINDOW,
+    hybrid_cantilever,
+    hybrid_cantilever_problem,
+    hybrid_fold,
+    tape_hybrid,
+)
 
 
 def coarse():
@@ -68,6 +76,25 @@ def test_hybrid_solve_refuses_bad_steps():
     hybrid, _ = hybrid_cantilever_problem(Config(), coarse(), 0.1)
     with pytest.raises(ValueError, match="first_step"):
         hybrid.solve(1.0, first_step=2.0, max_step=2.0)
+
+
+def test_hybrid_folds_in_its_shell_at_the_fold_moment():
+    """The benchmark tape, shell over 0.2 m at the root, beam beyond, its end turned to pi:
+    the moment plateau, the fold's radius and flat section as the full shell's (coarse mesh),
+    the fold inside the window clear of both its ends."""
+    config = Config()
+    result = hybrid_fold(config, MeshResolution.from_config(MeshConfig(preset="coarse"), config.tape.L))
+    failed = [(c.name, c.computed, c.error) for c in result.checks if not c.passed]
+    assert not failed, failed
+    start, end = result.info["fold_x_range"]
+    assert 0.02 < start < end < FOLD_WINDOW - 0.02
+
+
+def test_hybrid_refuses_a_laminated_wall():
+    """The beam's arc section is isotropic: a laminate is refused before anything is built."""
+    config = load_config(Path(__file__).parents[1] / "demos" / "cfrp_tape.toml")
+    with pytest.raises(ValueError, match="isotropic"):
+        tape_hybrid(config, 4, 0.0125, 0.3, 0.1)
 
 
 @pytest.mark.mpi

@@ -71,6 +71,9 @@ class Relaxation:
     scale: float
     max_iterations: int = 200
     tolerance: float = 1e-4  # relative change of the state below which plain Newton is tried
+    # the Function the viscous term acts on and whose change is measured, when the solved
+    # state is a joint one (a hybrid's shell); None: the continuation's state
+    state: object = None
 
 
 @dataclass
@@ -119,31 +122,33 @@ class Continuation:
         Newton solve is tried from it: a stable equilibrium is then close.
         """
         relax = self.relaxation
-        q = self.state.x.array
+        viscous = relax.state if relax.state is not None else self.state
+        q = viscous.x.array
         c = relax.scale
         total = 0
         self.set_load(target)
         try:
             for _ in range(relax.max_iterations):
                 relax.previous.x.array[:] = q
+                before = self._snapshot()
                 relax.coefficient.value = c
                 result = self.solve()
                 total += result.iterations
                 if not result.converged:
-                    q[:] = relax.previous.x.array
+                    self._restore(before)
                     c *= 4.0
                     continue
-                change = global_norm(self.state.function_space, q - relax.previous.x.array) / max(
-                    global_norm(self.state.function_space, q), 1e-300
+                change = global_norm(viscous.function_space, q - relax.previous.x.array) / max(
+                    global_norm(viscous.function_space, q), 1e-300
                 )
                 if change < relax.tolerance:
                     relax.coefficient.value = 0.0
-                    relaxed_state = q.copy()
+                    relaxed_state = self._snapshot()
                     plain = self.solve()
                     total += plain.iterations
                     if plain.converged:
                         return True, total
-                    q[:] = relaxed_state
+                    self._restore(relaxed_state)
                 c /= 4.0
         finally:
             relax.coefficient.value = 0.0

@@ -42,7 +42,8 @@ class BeamProblem:
         self.bcs: list = []
         self.point_forces: list[PointForce] = []
         self.energy_terms: list = []  # UFL energies beside the beam's own (contact)
-        self._turning: list[tuple] = []  # (u function, theta function, point, axis point, axis)
+        # (u function or None, theta function, point, axis point, axis): nodes turned by the load
+        self._turning: list[tuple] = []
         self._winding: list = []  # the winding contacts' updates of their angles
         self._predictors: list = []  # initial guesses of a step: predict(load_from, load_to)
         self.history: list[StepRecord] = []
@@ -79,6 +80,15 @@ class BeamProblem:
             centre, axis = (np.asarray(v, dtype=float) for v in turning_about)
             axis = axis / np.linalg.norm(axis)
             self._turning.append((u_values, theta_values, np.asarray(point, dtype=float), centre, axis))
+
+    def turn(self, point, axis) -> None:
+        """Turn the node at ``point`` [m] by the load parameter [rad] about ``axis``, its
+        displacement free: a rigid end section turned, which carries a pure moment."""
+        a = np.asarray(axis, dtype=float)
+        theta_values = self._dirichlet((1,), self._vertices(point))
+        self._turning.append(
+            (None, theta_values, np.asarray(point, dtype=float), None, a / np.linalg.norm(a))
+        )
 
     def hold(self, point, components: tuple[int, ...], rotation: bool = False) -> None:
         """Hold the displacement components ``components`` (0, 1, 2: x, y, z) of the node at
@@ -197,9 +207,10 @@ class BeamProblem:
     def _set_load(self, value: float) -> None:
         self.load.value = value
         for u_values, theta_values, point, centre, axis in self._turning:
-            R = rotation_matrix(axis, value)
-            u = R @ (point - centre) + centre - point
-            u_values.x.array[:] = np.tile(u, len(u_values.x.array) // 3)
+            if u_values is not None:
+                R = rotation_matrix(axis, value)
+                u = R @ (point - centre) + centre - point
+                u_values.x.array[:] = np.tile(u, len(u_values.x.array) // 3)
             increment = (value - self.committed_load) * axis  # the rotation since the last accepted step
             theta_values.x.array[:] = np.tile(increment, len(theta_values.x.array) // 3)
 

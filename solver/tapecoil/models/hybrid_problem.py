@@ -22,7 +22,8 @@ import time
 
 from tapecoil.config import SolverConfig
 from tapecoil.core.coupled_newton import Block, CoupledSNESSolver, JointState
-from tapecoil.core.stepping import Continuation, StepRecord
+from tapecoil.core.dofs import global_scalar
+from tapecoil.core.stepping import Continuation, Relaxation, StepRecord
 from tapecoil.models.interface import RigidSectionTie
 
 __all__ = ["HybridProblem"]
@@ -39,6 +40,7 @@ class HybridProblem:
         (x0, x1), _ = shell.surface.xi_range
         # the edge's element length: the strip's last element along xi_1 (graded meshes differ)
         element_length = strip.resolution.element_lengths(x1 - x0)[1]
+        self.tie_element = element_length
         self.tie = RigidSectionTie(
             shell.model,
             shell.edge("xi1_max"),
@@ -50,6 +52,16 @@ class HybridProblem:
         )
         self.history: list[StepRecord] = []
         self.wall_time = 0.0
+
+    def energy(self) -> float:
+        """The strain energy of shell and beam and the tie's [J] (collective)."""
+        comm = self.shell.strip.mesh.comm
+        self.tie.coupling.read()
+        return (
+            global_scalar(self.shell.model.strain_energy, comm)
+            + self.beam.model.strain_energy()
+            + global_scalar(self.tie.coupling.energy, comm)
+        )
 
     def _set_load(self, value: float) -> None:
         self.shell.set_load(value)
@@ -66,13 +78,19 @@ class HybridProblem:
         first_step: float,
         max_step: float,
         min_step: float | None = None,
+        max_cutbacks: int = 8,
+        relaxation: float | None = None,
         on_step=None,
         solver_config: SolverConfig | None = None,
         options: dict | None = None,
     ) -> list[StepRecord]:
         """Step the load parameter from where it is to ``load`` (adaptive, with cut-back), steps
         in the parameter's units; raises :class:`~tapecoil.core.stepping.ContinuationError` with
-        the last converged state kept when no step converges."""
+        the last converged state kept when no step converges.
+
+        ``relaxation``: the starting viscosity [N/m^3] of pseudo-transient relaxation on the
+        shell (:meth:`NaghdiShell.relaxation`, its length scale the shell's element), tried once
+        ``max_cutbacks`` cut-backs have not passed a snap; None: none."""
         start = self.beam.committed_load
         span = load - start
         if span == 0 or not 0 < first_step <= max_step <= abs(span):
@@ -82,6 +100,12 @@ class HybridProblem:
             )
         settings = solver_config or SolverConfig()
         F_s, J_s = self.shell.forms()
+        relax = None
+        if relaxation is not None:
+            coefficient, previous, viscous = self.shell.model.relaxation(length_scale=self.tie_element)
+            F_s = F_s + viscous
+            J_s = self.shell.model.jacobian_form(F_s)
+            relax = Relaxation(coefficient, previous, scale=relaxation, state=self.shell.model.q)
         F_b, J_b = self.beam.forms()
         blocks = [
             Block(
@@ -112,13 +136,17 @@ class HybridProblem:
         )
         smallest = 1e-6 * abs(span) if min_step is None else min_step
         control = settings.control(
-            initial_step=first_step / abs(span), max_step=max_step / abs(span), min_step=smallest / abs(span)
+            initial_step=first_step / abs(span),
+            max_step=max_step / abs(span),
+            min_step=smallest / abs(span),
+            max_cutbacks=max_cutbacks,
         )
         continuation = Continuation(
             solve=solver.solve,
             set_load=self._set_load,
             state=JointState(self.shell.model.q, self.beam.model.q),
             control=control,
+            relaxation=relax,
             commit=self._commit,
             on_step=on_step,
             predict=self.beam._predict if self.beam._predictors else None,

@@ -17,4 +17,13 @@ CASES = (
     "beam-hub",
     "beam-turns",
     "hybrid-cantilever",
+    "hybrid-fold",
 )
+
+
+def not_applicable(name: str, config) -> str | None:
+    """Why the case ``name`` cannot run on the tape of ``config`` (None: it can). The hybrid's
+    beam takes an isotropic arc section."""
+    if name.startswith("hybrid-") and config.laminate.kind != "isotropic":
+        return "the hybrid's beam takes an isotropic arc section, and this tape's wall is laminated"
+    return None

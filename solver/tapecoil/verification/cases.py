@@ -22,7 +22,7 @@ from tapecoil.verification.beam import (
     beam_turns,
 )
 from tapecoil.verification.checks import CaseResult
-from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever
+from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_fold
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
     ROLLUP_MESHES,
@@ -76,6 +76,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
     elif name == "hybrid-cantilever":
         resolution = MeshResolution.from_config(MeshConfig(preset=preset), CANTILEVER_LENGTH)
         result = hybrid_cantilever(config, resolution, comm=comm)
+    elif name == "hybrid-fold":
+        result = hybrid_fold(config, tape_res, comm=comm)
     else:
         result = tape_fold(config, tape_res, comm=comm)
     result.info["preset"] = preset

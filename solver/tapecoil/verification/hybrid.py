@@ -17,6 +17,16 @@ beyond, the two tied as a rigid section.
   The hybrid must turn as a rigid body: its tip back at its place to 1e-9 of the length, its
   strain energy at round-off. This exercises the tie's incremental rotations (moved on at
   every accepted step) through a whole turn.
+
+``hybrid-fold``: the tape of ``tape-fold`` (the benchmark's 0.5 m) with shell over its first
+:data:`FOLD_WINDOW` and the arc-section beam beyond, its end turned about the width axis in the
+opposite sense (free to translate: a pure moment) to pi. The shell must fold where the beam
+cannot, and the moment, carried by the beam and passed through the tie, must settle on the
+plateau of an opposite-sense fold: against alpha (sqrt(D11 D22) + D12) within 5 %, the fold's
+radius against R sqrt(D11 / D22) within 10 % and its section flat, as ``tape-fold`` checks the
+full shell (physics brief Sec. 10); and side by side with the full shell (``tape-fold`` on the
+same mesh), the plateau and the fold's radius within 2 %. Through the snap the shell is
+relaxed (pseudo-transient), as in ``tape-fold``.
 """
 
 from __future__ import annotations
@@ -42,11 +52,59 @@ CANTILEVER_LENGTH = 0.3  # [m]
 WINDOW = 0.1  # [m] of shell at the root
 TIP_ROTATION = 1e-4  # [rad] by beam theory: a linear response
 PENALTY = 1e3
+# [m] of shell at the root of the folded tape: room for the fold grown to pi and its transitions
+# (with 0.2 m the plateau comes out 6 % above the full shell's, the fold feeling the window's ends)
+FOLD_WINDOW = 0.3
 
 
 def _section_frame(x: np.ndarray) -> np.ndarray:
     """The beam's frame along a straight tape: along x, the chord (y), towards the centre (z)."""
     return np.broadcast_to(np.eye(3), (x.shape[1], 3, 3))
+
+
+def tape_hybrid(
+    config: Config,
+    across: int,
+    element: float,
+    length: float,
+    window: float,
+    *,
+    penalty=PENALTY,
+    comm=MPI.COMM_WORLD,
+    name="verify_hybrid",
+):
+    """The tape of ``config`` (an isotropic wall), ``length`` [m] long, as a hybrid: a shell of
+    ``window`` [m] from the root, ``across`` elements across and ``element`` [m] long, tied to a
+    beam of the arc section on the rest, its elements as long. No supports or loads yet.
+    Returns (hybrid, the beam's tip [m])."""
+    from tapecoil.models.problem import ShellProblem
+
+    if config.laminate.kind != "isotropic":
+        raise ValueError(
+            "the hybrid's beam takes an isotropic arc section: [laminate] kind must be isotropic"
+        )
+    tp = config.tape
+    centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
+    shell = ShellProblem(
+        StripGeometry(tp.R, tp.b, window),
+        MeshResolution(across, max(1, round(window / element))),
+        ShellMaterial(tp.E, tp.nu, tp.h),
+        comm=comm,
+        director_frame="global",
+        name=f"{name}_shell",
+    )
+    rest = length - window
+    beam = BeamProblem(
+        lambda s: np.column_stack([window + s, 0 * s, 0 * s + centroid]),
+        rest,
+        max(1, round(rest / element)),
+        BeamSection.circular_arc(tp.R, tp.alpha, tp.h, tp.E, tp.nu),
+        _section_frame,
+        comm=comm,
+        name=f"{name}_beam",
+    )
+    hybrid = HybridProblem(shell, beam, (window, 0.0, centroid), modulus=tp.E, penalty=penalty, name=name)
+    return hybrid, (length, 0.0, centroid)
 
 
 def hybrid_cantilever_problem(
@@ -58,35 +116,12 @@ def hybrid_cantilever_problem(
     comm=MPI.COMM_WORLD,
     name="verify_hybrid",
 ):
-    """The tape of ``config`` as a cantilever of :data:`CANTILEVER_LENGTH`: a shell of ``window``
-    [m] clamped at the root, tied to a beam on the rest; ``resolution``: the shell's elements
-    across and its element length (``along`` elements per :data:`CANTILEVER_LENGTH`), the beam
-    with elements of that length. Returns (hybrid, tip point of the beam)."""
-    from tapecoil.models.problem import ShellProblem
-
-    tp = config.tape
-    size = CANTILEVER_LENGTH / resolution.along
-    centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
-    shell = ShellProblem(
-        StripGeometry(tp.R, tp.b, window),
-        MeshResolution(resolution.across, max(1, round(window / size))),
-        ShellMaterial(tp.E, tp.nu, tp.h),
-        comm=comm,
-        director_frame="global",
-        name=f"{name}_shell",
+    """:func:`tape_hybrid` of :data:`CANTILEVER_LENGTH`, ``resolution`` its elements across and
+    along that length."""
+    element = CANTILEVER_LENGTH / resolution.along
+    return tape_hybrid(
+        config, resolution.across, element, CANTILEVER_LENGTH, window, penalty=penalty, comm=comm, name=name
     )
-    rest = CANTILEVER_LENGTH - window
-    beam = BeamProblem(
-        lambda s: np.column_stack([window + s, 0 * s, 0 * s + centroid]),
-        rest,
-        max(1, round(rest / size)),
-        BeamSection.circular_arc(tp.R, tp.alpha, tp.h, tp.E, tp.nu),
-        _section_frame,
-        comm=comm,
-        name=f"{name}_beam",
-    )
-    hybrid = HybridProblem(shell, beam, (window, 0.0, centroid), modulus=tp.E, penalty=penalty, name=name)
-    return hybrid, (CANTILEVER_LENGTH, 0.0, centroid)
 
 
 def _tip_deflection(config, resolution, window, force, penalty, comm) -> tuple[float, HybridProblem, float]:
@@ -145,4 +180,88 @@ def hybrid_cantilever(config: Config, resolution: MeshResolution, comm=MPI.COMM_
             "turn_steps": len(turned.history),
             "turn_newton_iterations": sum(r.iterations for r in turned.history),
         },
+    )
+
+
+def hybrid_fold(
+    config: Config,
+    resolution: MeshResolution,
+    comm=MPI.COMM_WORLD,
+    final_angle: float = math.pi,
+    on_step=None,
+) -> CaseResult:
+    """The tape folded by its turned end, shell near the root and beam beyond (see the module).
+
+    ``resolution``: the shell's elements across and along the tape's length (the beam's elements
+    as long); ``on_step(record, angle, energy)`` after each accepted step."""
+    from tapecoil.verification.tape import fold_shape, moment_path, tape_fold
+
+    tp = config.tape
+    element = tp.L / resolution.along
+    hybrid, tip = tape_hybrid(
+        config, resolution.across, element, tp.L, FOLD_WINDOW, comm=comm, name="verify_hybrid_fold"
+    )
+    hybrid.shell.clamp("xi1_min")
+    hybrid.beam.turn(tip, (0.0, 1.0, 0.0))
+    bending = config.wall.bending
+    path = []
+
+    def record(step):
+        path.append((step.load, hybrid.energy(), step.iterations, step.relaxed))
+        if on_step is not None:
+            on_step(step, step.load, path[-1][1])
+
+    # small steps towards the snap (1 % to 2 % of the end rotation) and few cut-backs before
+    # relaxing through it, as tape-fold
+    hybrid.solve(
+        final_angle,
+        first_step=0.01 * final_angle,
+        max_step=0.02 * final_angle,
+        max_cutbacks=4,
+        relaxation=10 * bending.D11 / element**4,
+        on_step=record,
+        solver_config=config.solver,
+    )
+    phi, energy = np.array([p[0] for p in path]), np.array([p[1] for p in path])
+    snap, moment, plateau = moment_path(phi, energy, [p[3] for p in path])
+    shape = fold_shape(hybrid.shell.model, tp.b, tp.R)
+    fold_reference = theory.fold_radius(bending, tp.R)
+    dofs = global_size(hybrid.shell.model.W) + global_size(hybrid.beam.model.W)
+    full = tape_fold(config, resolution, final_angle=final_angle, comm=comm)
+    full_radius = full.checks[1].computed * fold_reference
+    return CaseResult(
+        "hybrid-fold",
+        [
+            Check(
+                "moment plateau / alpha (sqrt(D11 D22) + D12)",
+                plateau / theory.fold_moment(bending, tp.alpha),
+                1.0,
+                0.05,
+            ),
+            Check("fold radius / R sqrt(D11 / D22)", shape["radius"] / fold_reference, 1.0, 0.10),
+            Check("transverse curvature in the fold x R", shape["transverse"], 0.0, 0.10, True),
+            Check("moment plateau / the full shell's", plateau / full.info["plateau_moment"], 1.0, 0.02),
+            Check("fold radius / the full shell's", shape["radius"] / full_radius, 1.0, 0.02),
+        ],
+        {
+            "mesh": f"shell {resolution.across} across, elements {element * 1e3:.3g} mm long",
+            "window": FOLD_WINDOW,
+            "dofs": {"hybrid": dofs, "full_shell": full.info["dofs"]},
+            "steps": {"hybrid": len(path), "full_shell": full.info["steps"]},
+            "newton_iterations": {
+                "hybrid": int(sum(p[2] for p in path)),
+                "full_shell": int(sum(full.info["newton_iterations"])),
+            },
+            "snap_angle": float(phi[snap]) if snap is not None else None,
+            "peak_moment": float(np.nanmax(moment)),
+            "plateau_moment": plateau,
+            "fold_x_range": shape["x_range"],
+            "fold_energy_density_over_mu": shape["energy_density"]
+            / theory.energy_density(fold_reference, tp.R, bending),
+            "tie_gap_rms": dict(zip(("position", "director"), hybrid.tie.gaps(), strict=True)),
+            "wall_time": {"hybrid": hybrid.wall_time, "full_shell": full.info["wall_time"]},
+            "full_shell_snap_angle": full.info["snap_angle"],
+            "path": [[float(a), float(m)] for a, m in zip(phi, moment, strict=True)],
+        },
+        model=hybrid.shell.model,
     )

@@ -223,39 +223,12 @@ def tape_fold(
     solver.destroy()
 
     phi, energy = np.array([p[0] for p in path]), np.array([p[1] for p in path])
-    # the snap: under rotation control the energy can only fall through a dynamic jump (with or
-    # without relaxation, the first step whose energy is below its predecessor's)
-    snap = next((i for i in range(1, len(path)) if energy[i] < energy[i - 1] or path[i][3]), None)
-    # M = dE/dphi on each branch: the energy drops across the snap, which has no derivative
-    branches = [slice(0, snap), slice(snap, None)] if snap is not None else [slice(None)]
-    moment = np.concatenate(
-        [
-            np.gradient(energy[b], phi[b]) if len(phi[b]) > 1 else np.full(len(phi[b]), np.nan)
-            for b in branches
-        ]
-    )
+    snap, moment, plateau = moment_path(phi, energy, [p[3] for p in path])
     M_star = theory.fold_moment(bending, tp.alpha)
     fold_reference = theory.fold_radius(bending, tp.R)
     w_reference = theory.energy_density(fold_reference, tp.R, bending)
-    # plateau: the secant slope of the energy over the second half of the post-snap path
-    if snap is not None:
-        first = snap + (len(phi) - snap) // 2
-        plateau = (energy[-1] - energy[first]) / (phi[-1] - phi[first])
-    else:
-        plateau = float("nan")
-
-    kx, ky = model.curvatures()
-    V0, local = cell_midpoint_values(model.mesh, [kx, ky])
-    cells = np.vstack(comm.allgather(local))
-    # opposite sense: the fold's longitudinal curvature is negative (the section's own is +1/R)
-    inner = np.abs(cells[:, 1]) <= 0.3 * tp.b  # inner 60 % of the width
-    bend = -cells[:, 2]
-    threshold = 0.7 * np.max(bend[inner])
-    fold = inner & (bend > threshold)
-    local_fold = (np.abs(local[:, 1]) <= 0.3 * tp.b) & (-local[:, 2] > threshold)
-    fold_radius = float(np.median(1.0 / bend[fold])) if fold.any() else float("nan")
-    transverse = float(np.median(np.abs(cells[fold, 3]))) * tp.R if fold.any() else float("nan")
-    w_fold = region_energy_density(model, V0, local_fold) if fold.any() else float("nan")
+    shape = fold_shape(model, tp.b, tp.R)
+    fold_radius, transverse, w_fold = shape["radius"], shape["transverse"], shape["energy_density"]
     return CaseResult(
         "tape-fold",
         [
@@ -272,10 +245,8 @@ def tape_fold(
             "snap_angle": float(phi[snap]) if snap is not None else None,
             "peak_moment": float(np.nanmax(moment)),
             "plateau_moment": plateau,
-            "fold_cells": int(fold.sum()),
-            "fold_x_range": [float(cells[fold, 0].min()), float(cells[fold, 0].max())]
-            if fold.any()
-            else None,
+            "fold_cells": shape["cells"],
+            "fold_x_range": shape["x_range"],
             "path": [[float(a), float(m)] for a, m in zip(phi, moment, strict=True)],
             "newton_iterations": [p[2] for p in path],
             "wall_time": wall,
@@ -283,3 +254,51 @@ def tape_fold(
         },
         model=model,
     )
+
+
+def moment_path(phi: np.ndarray, energy: np.ndarray, relaxed) -> tuple:
+    """The moment M = dE/dphi along a rotation-controlled fold's path: (index of the snap or
+    None, M at every step, the plateau after the snap).
+
+    The snap: under rotation control the energy can only fall through a dynamic jump (with or
+    without relaxation, the first step whose energy is below its predecessor's). M is taken on
+    each branch (the energy drops across the snap, which has no derivative); the plateau is
+    the secant slope of the energy over the second half of the post-snap path.
+    """
+    snap = next((i for i in range(1, len(phi)) if energy[i] < energy[i - 1] or relaxed[i]), None)
+    branches = [slice(0, snap), slice(snap, None)] if snap is not None else [slice(None)]
+    moment = np.concatenate(
+        [
+            np.gradient(energy[b], phi[b]) if len(phi[b]) > 1 else np.full(len(phi[b]), np.nan)
+            for b in branches
+        ]
+    )
+    if snap is None:
+        return None, moment, float("nan")
+    first = snap + (len(phi) - snap) // 2
+    return snap, moment, float((energy[-1] - energy[first]) / (phi[-1] - phi[first]))
+
+
+def fold_shape(model: NaghdiShell, width: float, R: float) -> dict:
+    """An opposite-sense fold in the shell ``model`` (a tape of arc ``width`` and radius ``R``
+    [m]): the cells over the inner 60 % of the width whose longitudinal curvature is beyond 0.7
+    of the largest; their median radius [m], median transverse curvature times R, energy per
+    unit area [J/m^2], count and x range [m] (collective; NaN and None without a fold)."""
+    comm = model.mesh.comm
+    kx, ky = model.curvatures()
+    V0, local = cell_midpoint_values(model.mesh, [kx, ky])
+    cells = np.vstack(comm.allgather(local))
+    # opposite sense: the fold's longitudinal curvature is negative (the section's own is +1/R)
+    inner = np.abs(cells[:, 1]) <= 0.3 * width
+    bend = -cells[:, 2]
+    threshold = 0.7 * np.max(bend[inner])
+    fold = inner & (bend > threshold)
+    local_fold = (np.abs(local[:, 1]) <= 0.3 * width) & (-local[:, 2] > threshold)
+    found = bool(fold.any())
+    return {
+        "radius": float(np.median(1.0 / bend[fold])) if found else float("nan"),
+        "transverse": float(np.median(np.abs(cells[fold, 3]))) * R if found else float("nan"),
+        "energy_density": region_energy_density(model, V0, local_fold) if found else float("nan"),
+        "cells": int(fold.sum()),
+        "x_range": [float(cells[fold, 0].min()), float(cells[fold, 0].max())] if found else None,
+    }

@@ -1,4 +1,5 @@
-"""``tapecoil verify``: the shell's and the beam's verification cases against their references."""
+"""``tapecoil verify``: the shell's, the beam's and the hybrid's verification cases against their
+references."""
 
 from __future__ import annotations
 
@@ -15,12 +16,20 @@ def cmd_verify(args: argparse.Namespace) -> int:
 
     config = load_config(args.config)
     from tapecoil.core.stepping import ContinuationError
-    from tapecoil.verification import CASES
+    from tapecoil.verification import CASES, not_applicable
     from tapecoil.verification.cases import run_case
 
     names = CASES if args.case == "all" else (args.case,)
+    if args.case != "all" and (reason := not_applicable(args.case, config)):
+        if rank() == 0:
+            print(f"tapecoil: {args.case} cannot run: {reason}", file=sys.stderr, flush=True)
+        return 2
     results, stopped = [], {}
     for name in names:
+        if reason := not_applicable(name, config):
+            if rank() == 0:
+                print(f"tapecoil: {name} skipped: {reason}", file=sys.stderr, flush=True)
+            continue
         t0 = time.perf_counter()
         try:
             result = run_case(name, config, args.mesh)
