@@ -29,7 +29,7 @@ from petsc4py import PETSc
 
 from tapecoil.core import compat
 from tapecoil.core.convergence import ResidualTest
-from tapecoil.core.newton import SolveResult, assemble_residual
+from tapecoil.core.newton import SolveResult, assemble_residual, run_snes
 from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix, options_in_database
 
 __all__ = ["Block", "CoupledSNESSolver", "DofCoupling", "JointState"]
@@ -334,17 +334,10 @@ class CoupledSNESSolver:
     def solve(self) -> SolveResult:
         """Solve from the current states; on failure they hold the last iterate."""
         self._write_states(self.x)
-        t0 = time.perf_counter()
-        with options_in_database(self.prefix, self.options):
-            self.snes.solve(None, self.x)
-        self.timings["solve"] += time.perf_counter() - t0
-        self.timings["iterations"] += self.snes.getIterationNumber()
-        reason = self.snes.getConvergedReason()
-        norm = self.snes.getFunctionNorm()
-        converged = reason > 0 and np.isfinite(norm)
-        if converged:
+        result = run_snes(self.snes, self.x, self.prefix, self.options, self.timings)
+        if result.converged:
             self._update_states(self.x)
-        return SolveResult(converged, self.snes.getIterationNumber(), reason, float(norm))
+        return result
 
     def destroy(self) -> None:
         for obj in (self.snes, self.J, self.C, self.CT, self.x, self.r, *self.A, *self.b):

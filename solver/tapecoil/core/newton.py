@@ -90,6 +90,20 @@ def assemble_jacobian(A, J_form, bcs, terms=()) -> list:
     return [term.add_jacobian(A) for term in terms]
 
 
+def run_snes(snes, x, prefix: str, options: dict, timings: dict) -> SolveResult:
+    """``snes.solve`` from x with ``options`` under ``prefix`` in PETSc's database for the
+    solve; adds the wall time and iterations to ``timings``. Converged means a positive reason
+    and a finite residual."""
+    t0 = time.perf_counter()
+    with options_in_database(prefix, options):
+        snes.solve(None, x)
+    timings["solve"] += time.perf_counter() - t0
+    timings["iterations"] += snes.getIterationNumber()
+    reason = snes.getConvergedReason()
+    norm = snes.getFunctionNorm()
+    return SolveResult(reason > 0 and bool(np.isfinite(norm)), snes.getIterationNumber(), reason, float(norm))
+
+
 class SNESSolver:
     """Newton (PETSc SNES) for F(q) = 0 with Jacobian J and Dirichlet conditions ``bcs``.
 
@@ -199,17 +213,10 @@ class SNESSolver:
         if any([term.begin() for term in self.terms]):  # a list: every term's begin() runs
             self._renew_matrix()
         self.q.x.petsc_vec.copy(self.x)
-        t0 = time.perf_counter()
-        with options_in_database(self.prefix, self.options):
-            self.snes.solve(None, self.x)
-        self.timings["solve"] += time.perf_counter() - t0
-        self.timings["iterations"] += self.snes.getIterationNumber()
-        reason = self.snes.getConvergedReason()
-        norm = self.snes.getFunctionNorm()
-        converged = reason > 0 and np.isfinite(norm)
-        if converged:
+        result = run_snes(self.snes, self.x, self.prefix, self.options, self.timings)
+        if result.converged:
             self._update_state(self.x)
-        return SolveResult(converged, self.snes.getIterationNumber(), reason, float(norm))
+        return result
 
     def timing_per_iteration(self) -> dict[str, float]:
         """Mean wall time per Newton iteration [s]: assembly (residual + Jacobian) and the rest.
