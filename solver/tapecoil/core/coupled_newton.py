@@ -183,7 +183,7 @@ class CoupledSNESSolver:
         self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
 
         # the rows of the first block that the coupling touches: the dofs of the cells its
-        # integrals see, found from the vectors' support once (their pattern is then fixed)
+        # integrals see; every Jacobian sets all of them, zeros too, so the pattern is fixed
         self._rows = self._coupled_rows()
         n0, n1 = (_owned_size(blk.q.function_space) for blk in blocks)
         N0, N1 = (
