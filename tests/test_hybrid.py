@@ -97,6 +97,80 @@ def test_hybrid_refuses_a_laminated_wall():
         tape_hybrid(config, 4, 0.0125, 0.3, 0.1)
 
 
+def carried_and_direct(comm=MPI.COMM_WORLD, load=2.0, force=False):
+    """A hybrid with 0.1 m of shell stepped to ``load`` (the clamp's turn [rad], or a tip force
+    [N] with ``force``), carried over to 0.15 m of shell and stepped on by 5 %; and the
+    uninterrupted run with 0.15 m. Returns (carried, direct, tip, energies at the carry-over)."""
+    from tapecoil.models.window import carry_over
+
+    def build(window, name):
+        hybrid, tip = hybrid_cantilever_problem(Config(), coarse(), window, comm=comm, name=name)
+        if force:
+            hybrid.shell.clamp("xi1_min")
+            hybrid.beam.end_load(tip, force=(0.0, 0.0, 1.0))
+        else:
+            hybrid.shell.turn("xi1_min", (0.0, 1.0, 0.0), (0.0, 0.0, 0.0))
+        return hybrid, tip
+
+    steps = {"first_step": load / 8, "max_step": load / 8}
+    old, tip = build(0.1, "old")
+    old.solve(load, **steps)
+    carried, _ = build(0.15, "carried")
+    before = old.energy()
+    carry_over(old, carried)
+    after = carried.energy()
+    carried.solve(1.05 * load, first_step=0.05 * load, max_step=0.05 * load)
+    direct, _ = build(0.15, "direct")
+    direct.solve(1.05 * load, **steps)
+    return carried, direct, tip, (before, after)
+
+
+def test_a_carried_over_state_reaches_the_uninterrupted_runs_equilibrium():
+    """The window grown from 0.1 to 0.15 m into the beam at a turn of 2 rad (the sections turned
+    rigidly, as the straight part ahead of a ploy region) and under a tip force: one step on,
+    tip and energy as the run that had 0.15 m of shell all along (1e-9 of L; 1e-6)."""
+    for force, load in ((False, 2.0), (True, 0.5)):
+        carried, direct, tip, _ = carried_and_direct(force=force, load=load)
+        gap = np.linalg.norm(carried.beam.position(tip) - direct.beam.position(tip))
+        assert gap / CANTILEVER_LENGTH < 1e-9, force
+        # to the Newton tolerance: 4e-8 under the force
+        assert carried.energy() == pytest.approx(direct.energy(), rel=1e-6), force
+
+
+def test_carry_over_places_the_sections_where_the_beam_had_them():
+    """At the carry-over the new shell's nodes are where the old beam's sections put them: after
+    a rigid turn by 2 rad, the mean of the tied edge's positions less the turned reference, to
+    the shell's own rigid-turn error (2e-6 m at its old edge on this mesh)."""
+    import ufl
+
+    from tapecoil.core.rotation import rotation_matrix
+    from tapecoil.models.window import carry_over
+
+    old, tip = hybrid_cantilever_problem(Config(), coarse(), 0.1, name="old")
+    old.shell.turn("xi1_min", (0.0, 1.0, 0.0), (0.0, 0.0, 0.0))
+    old.solve(2.0, first_step=0.25, max_step=0.25)
+    new, _ = hybrid_cantilever_problem(Config(), coarse(), 0.15, name="new")
+    new.shell.turn("xi1_min", (0.0, 1.0, 0.0), (0.0, 0.0, 0.0))
+    carry_over(old, new)
+    R = ufl.as_matrix(rotation_matrix(np.array([0.0, 1.0, 0.0]), 2.0).tolist())
+    model = new.shell.model
+    assert np.linalg.norm(new.shell.edge_average("xi1_max", model.phi - R * model.phi0)) < 1e-5
+    assert np.allclose(new.beam.position(tip), old.beam.position(tip), rtol=0, atol=1e-12)
+
+
+def test_carry_over_refuses_windows_that_do_not_fit():
+    from tapecoil.models.window import carry_over
+
+    old, _ = hybrid_cantilever_problem(Config(), coarse(), 0.15, name="old")
+    shorter, _ = hybrid_cantilever_problem(Config(), coarse(), 0.1, name="shorter")
+    with pytest.raises(ValueError, match="shorter than the old"):
+        carry_over(old, shorter)
+    config = Config()
+    misplaced, _ = tape_hybrid(config, 4, 0.3 / 23, 0.3, 0.3 / 23 * 13, name="misplaced")
+    with pytest.raises(ValueError, match="do not lie where"):
+        carry_over(old, misplaced)
+
+
 @pytest.mark.mpi
 def test_two_ranks_solve_the_hybrid_as_one():
     """The hybrid cantilever on all ranks and on each alone: tip deflections and the turned tip
@@ -109,3 +183,9 @@ def test_two_ranks_solve_the_hybrid_as_one():
             serial.info["tip_deflection"][key], rel=1e-9
         )
     assert parallel.passed and serial.passed
+    # the carry-over gathers both states from every rank
+    carried_parallel, _, tip, energies_parallel = carried_and_direct(MPI.COMM_WORLD)
+    carried_serial, _, _, energies_serial = carried_and_direct(MPI.COMM_SELF)
+    assert energies_parallel == pytest.approx(energies_serial, rel=1e-9)
+    gap = carried_parallel.beam.position(tip) - carried_serial.beam.position(tip)
+    assert np.linalg.norm(gap) / CANTILEVER_LENGTH < 1e-9

@@ -47,6 +47,7 @@ from mpi4py import MPI
 
 from tapecoil.core import compat
 from tapecoil.core.dofs import global_scalar
+from tapecoil.core.rotation import rotation_matrices
 from tapecoil.models.beam_section import BeamSection
 
 __all__ = ["BeamSection", "GeometricallyExactBeam", "create_beam_mesh"]
@@ -191,6 +192,15 @@ class GeometricallyExactBeam:
         self._next_curvature = dolfinx.fem.Expression(self.curvature, points)
         _, theta_map = compat.collapse(self.W.sub(1))
         self._theta_dofs = theta_map
+        # the nodes (local and ghost): reference points, the dofs of u and theta at each, and the
+        # section frames there, moved on at every commit as the quadrature points' are (a state
+        # carried over to another model reads them)
+        u_spaces = [compat.collapse(self.W.sub(0).sub(i)) for i in range(3)]
+        self.node_points = u_spaces[0][0].tabulate_dof_coordinates()[:, :3].copy()
+        self.node_u_dofs = np.column_stack([m for _, m in u_spaces])
+        self.node_theta_dofs = np.column_stack([compat.collapse(self.W.sub(1).sub(i))[1] for i in range(3)])
+        self.node_reference_frames = np.array(frame(self.node_points.T), dtype=float).reshape(-1, 3, 3)
+        self.node_frames = self.node_reference_frames.copy()
 
     def set_section(self, cells: np.ndarray, section: BeamSection) -> None:
         """Give the owned ``cells`` (local indices) the stiffnesses, natural curvature and energy
@@ -222,6 +232,22 @@ class GeometricallyExactBeam:
         size = int(np.prod(expression.ufl_expression.ufl_shape))  # a rank may hold no cell
         return values.reshape(len(cells), n_points, size)
 
+    def quadrature_values(self, name: str) -> np.ndarray:
+        """At the quadrature points of every local cell, in order: their reference positions
+        (``"points"``, (n, 3) [m]), the committed frames (``"frame_n"``, (n, 9)) or curvatures
+        (``"curvature_n"``, (n, 3) [1/m])."""
+        fields = {"points": (ufl.SpatialCoordinate(self.mesh), 3), "frame_n": (self.frame_n, 9)}
+        fields["curvature_n"] = (self.curvature_n, 3)
+        expression, size = fields[name]
+        points = compat.interpolation_points(self.frame_n.function_space)
+        return self._at_points(dolfinx.fem.Expression(expression, points)).reshape(-1, size)
+
+    def set_quadrature_values(self, frames: np.ndarray, curvatures: np.ndarray) -> None:
+        """Set the committed frames (n, 9) and curvatures (n, 3) at the quadrature points, in the
+        order of :meth:`quadrature_values` (a state carried over from another beam)."""
+        _store(self.frame_n, np.asarray(frames))
+        _store(self.curvature_n, np.asarray(curvatures))
+
     def rounding_scale(self):
         """What each state component is added to, for the solver's round-off floor: a displacement
         to its node's reference position [m], a rotation increment to a frame of unit columns."""
@@ -238,7 +264,8 @@ class GeometricallyExactBeam:
         return ufl.grad(f) * self.tangent
 
     def commit(self) -> None:
-        """Accept the current state: Lambda_n <- R(theta) Lambda_n, K_n <- K, theta <- 0.
+        """Accept the current state: Lambda_n <- R(theta) Lambda_n (at the quadrature points and
+        the nodes), K_n <- K, theta <- 0.
 
         Both new fields are evaluated before either is stored (each reads the old frame).
         """
@@ -246,6 +273,7 @@ class GeometricallyExactBeam:
         frame = self._at_points(self._next_frame)
         _store(self.curvature_n, curvature)
         _store(self.frame_n, frame)
+        self.node_frames = rotation_matrices(self.q.x.array[self.node_theta_dofs]) @ self.node_frames
         self.q.x.array[self._theta_dofs] = 0.0
         self.q.x.scatter_forward()
 
