@@ -15,7 +15,10 @@ from tapecoil.verification.hybrid import hybrid_fold
 
 preset = sys.argv[1] if len(sys.argv) > 1 else "coarse"
 lengths = [float(v) for v in sys.argv[2:]] or [0.5, 1.0, 2.0]
-print("| L [m] | DOFs hybrid / shell | Newton its hybrid / shell | wall hybrid / shell [s] | ratio | plateau hybrid / shell |")
+print(
+    "| L [m] | DOFs hybrid / shell | Newton its hybrid / shell | wall hybrid / shell [s] | ratio "
+    "| plateau hybrid / shell |"
+)
 print("|---|---|---|---|---|---|")
 for length in lengths:
     config = config_from_dict({"tape": {"L": length}})
