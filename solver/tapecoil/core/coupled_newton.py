@@ -29,8 +29,8 @@ from petsc4py import PETSc
 
 from tapecoil.core import compat
 from tapecoil.core.convergence import ResidualTest
-from tapecoil.core.newton import SolveResult, assemble_residual, run_snes
-from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix, options_in_database
+from tapecoil.core.newton import SolveResult, assemble_residual, create_snes, run_snes
+from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix
 
 __all__ = ["Block", "CoupledSNESSolver", "DofCoupling", "JointState"]
 
@@ -220,16 +220,15 @@ class CoupledSNESSolver:
 
         self.prefix = prefix
         self.options = {**DEFAULT_PETSC_OPTIONS, **(options or {})}
-        self.snes = PETSc.SNES().create(comm)
-        self.snes.setOptionsPrefix(prefix)
-        self.snes.setFunction(self._residual, self.r)
-        self.snes.setJacobian(self._jacobian, self.J)
-        self.snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
-        self.convergence.install(self.snes)
-        with options_in_database(self.prefix, self.options):
-            self.snes.setFromOptions()
-            self.snes.getKSP().setFromOptions()
-        self.snes.setErrorIfNotConverged(False)
+        self.snes = create_snes(
+            comm,
+            prefix,
+            self.options,
+            (self._residual, self.r),
+            (self._jacobian, self.J),
+            (rtol, atol, max_it),
+            self.convergence,
+        )
 
     # --- the coupling's blocks
     def _coupled_rows(self) -> np.ndarray:

@@ -104,6 +104,27 @@ def run_snes(snes, x, prefix: str, options: dict, timings: dict) -> SolveResult:
     return SolveResult(reason > 0 and bool(np.isfinite(norm)), snes.getIterationNumber(), reason, float(norm))
 
 
+def create_snes(comm, prefix, options, function, jacobian, tolerances, convergence, monitor=None):
+    """A SNES under ``prefix``: ``function`` = (callback, residual vector), ``jacobian`` =
+    (callback, matrix), ``tolerances`` = (rtol, atol, max_it), the residual test ``convergence``
+    installed before ``options`` (PETSc names without the prefix, over which the command line
+    wins) are read. A non-finite residual ends a solve as diverged instead of raising."""
+    snes = PETSc.SNES().create(comm)
+    snes.setOptionsPrefix(prefix)
+    snes.setFunction(*function)
+    snes.setJacobian(*jacobian)
+    rtol, atol, max_it = tolerances
+    snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
+    convergence.install(snes)  # before the options are read: they may change it
+    if monitor is not None:
+        snes.setMonitor(monitor)
+    with options_in_database(prefix, options):
+        snes.setFromOptions()
+        snes.getKSP().setFromOptions()
+    snes.setErrorIfNotConverged(False)
+    return snes
+
+
 class SNESSolver:
     """Newton (PETSc SNES) for F(q) = 0 with Jacobian J and Dirichlet conditions ``bcs``.
 
@@ -143,24 +164,21 @@ class SNESSolver:
         # cumulative wall times [s]: residual and Jacobian assembly, and whole solves
         self.timings = {"residual": 0.0, "jacobian": 0.0, "solve": 0.0, "iterations": 0}
 
-        comm = V.mesh.comm
         self.prefix = prefix
         self.options = {**DEFAULT_PETSC_OPTIONS, **(options or {})}
-        self.snes = PETSc.SNES().create(comm)
-        self.snes.setOptionsPrefix(prefix)
-        self.snes.setFunction(self._residual, self.b)
-        self.snes.setJacobian(self._jacobian, self.A)
-        self.snes.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
         self.convergence = ResidualTest(
             None if state_scale is None else state_scale.x.array[: self.x.getLocalSize()]
         )
-        self.convergence.install(self.snes)  # before the options are read: they may change it
-        self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
-        with options_in_database(self.prefix, self.options):
-            self.snes.setFromOptions()
-            self.snes.getKSP().setFromOptions()
-        # a non-finite residual ends the solve as diverged instead of poisoning the state
-        self.snes.setErrorIfNotConverged(False)
+        self.snes = create_snes(
+            V.mesh.comm,
+            prefix,
+            self.options,
+            (self._residual, self.b),
+            (self._jacobian, self.A),
+            (rtol, atol, max_it),
+            self.convergence,
+            monitor=lambda _snes, _it, norm: self.norms.append(norm),
+        )
 
     def _update_state(self, x) -> None:
         qv = self.q.x.petsc_vec
