@@ -68,10 +68,14 @@ class RigidSectionTie:
         h = shell.material.h
         self.k_u = penalty * modulus * h / element_length  # [N/m^2]
         self.k_d = penalty * modulus * h**3 / element_length  # [N]
+        # the numbers as Constants, not literals: every tie then compiles to the same forms, and
+        # a tie elsewhere or stiffer reuses them (compiling them takes about a minute)
+        stiffness = dolfinx.fem.Constant(shell.mesh, np.array([self.k_u, self.k_d]))
+        X_e = dolfinx.fem.Constant(shell.mesh, self.end)
         c = self.coupling.variable
         displacement = ufl.as_vector([c[0], c[1], c[2]])
         Q = rotation(ufl.as_vector([c[3], c[4], c[5]])) * self.turned
-        X, X_e = shell.phi0, ufl.as_vector(self.end.tolist())
+        X = shell.phi0
         self.position_gap = shell.phi - (X_e + displacement) - Q * (X - X_e)
         self.director_gap = shell.d - Q * shell.n0
         tangent = shell.J0[:, 1]  # along the edge, which lies across the tape (xi_1 fixed)
@@ -79,8 +83,8 @@ class RigidSectionTie:
         density = (
             0.5
             * (
-                self.k_u * ufl.dot(self.position_gap, self.position_gap)
-                + self.k_d * ufl.dot(self.director_gap, self.director_gap)
+                stiffness[0] * ufl.dot(self.position_gap, self.position_gap)
+                + stiffness[1] * ufl.dot(self.director_gap, self.director_gap)
             )
             * self.line_element
         )
