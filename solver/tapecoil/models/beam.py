@@ -50,7 +50,7 @@ from tapecoil.core.dofs import global_scalar
 from tapecoil.core.rotation import rotation_matrices
 from tapecoil.models.beam_section import BeamSection
 
-__all__ = ["BeamSection", "GeometricallyExactBeam", "create_beam_mesh"]
+__all__ = ["BeamSection", "GeometricallyExactBeam", "create_beam_mesh", "vertices_at"]
 
 # a cell's section as a DG0 vector: EA, GA2, GA3, GJ, EI2, EI3, natural curvature (3), energy offset
 SECTION_FIELDS = 10
@@ -76,6 +76,17 @@ def create_beam_mesh(comm, centre_line: Callable[[np.ndarray], np.ndarray], leng
     else:
         x, cells = np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
     return compat.create_mesh(comm, cells.astype(np.int64), x, ufl.Mesh(element))
+
+
+def vertices_at(mesh, point) -> np.ndarray:
+    """The local vertices of a beam mesh at ``point`` [m] (to 1e-9 of its size); refused on every
+    rank when no rank has one (collective)."""
+    p = np.asarray(point, dtype=float)
+    scale = 1e-9 * (1.0 + np.abs(mesh.geometry.x).max(initial=0.0))
+    found = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.all(np.abs(x - p[:, None]) <= scale, axis=0))
+    if mesh.comm.allreduce(len(found), op=MPI.MAX) == 0:
+        raise ValueError(f"no node of the beam at {tuple(p)}")
+    return found
 
 
 def _skew(v):

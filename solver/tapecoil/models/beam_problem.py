@@ -18,7 +18,7 @@ from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.rotation import rotation_matrix
 from tapecoil.core.smoothing import penetration_ufl
 from tapecoil.core.stepping import Continuation, StepRecord
-from tapecoil.models.beam import GeometricallyExactBeam, create_beam_mesh
+from tapecoil.models.beam import GeometricallyExactBeam, create_beam_mesh, vertices_at
 
 __all__ = ["BeamProblem"]
 
@@ -49,14 +49,7 @@ class BeamProblem:
         self.history: list[StepRecord] = []
 
     def _vertices(self, point) -> np.ndarray:
-        p = np.asarray(point, dtype=float)
-        scale = 1e-9 * (1.0 + np.abs(self.mesh.geometry.x).max(initial=0.0))
-        found = dolfinx.mesh.locate_entities(
-            self.mesh, 0, lambda x: np.all(np.abs(x - p[:, None]) <= scale, axis=0)
-        )
-        if self.mesh.comm.allreduce(len(found), op=MPI.MAX) == 0:
-            raise ValueError(f"no node of the beam at {tuple(p)}")
-        return found
+        return vertices_at(self.mesh, point)
 
     def _dirichlet(self, sub: tuple[int, ...], vertices):
         """A Dirichlet condition on the subspace ``sub`` at ``vertices`` and the Function of its values."""

@@ -36,8 +36,8 @@ import ufl
 
 from tapecoil.core.coupled_newton import DofCoupling
 from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
-from tapecoil.core.rotation import rotation_matrix
-from tapecoil.models.beam import rotation
+from tapecoil.core.rotation import rotation_matrices
+from tapecoil.models.beam import rotation, vertices_at
 
 __all__ = ["RigidSectionTie"]
 
@@ -56,7 +56,7 @@ class RigidSectionTie:
                 raise ValueError(f"rigid section tie: {name} must be a positive number, got {value!r}")
         self.shell, self.beam = shell, beam
         self.end = np.asarray(end, dtype=float)
-        vertices = _vertex_at(beam.mesh, self.end)
+        vertices = vertices_at(beam.mesh, self.end)
         dofs = []
         for sub in (0, 1):
             for i in range(3):
@@ -108,9 +108,7 @@ class RigidSectionTie:
         """Accept the current state: Q_n <- R(theta_e) Q_n (call before the beam's own commit,
         which sets theta back to zero). Collective."""
         self.coupling.read()
-        theta = np.array(self.coupling.c.value[3:6])
-        angle = float(np.linalg.norm(theta))
-        R = np.eye(3) if angle == 0.0 else rotation_matrix(theta / angle, angle)
+        R = rotation_matrices(np.array(self.coupling.c.value[3:6]))[0]
         self.turned.value[:] = R @ np.asarray(self.turned.value)
 
     def gaps(self) -> tuple[float, float]:
@@ -126,10 +124,3 @@ class RigidSectionTie:
             for g in (self.position_gap, self.director_gap)
         ]
         return rms[0], rms[1]
-
-
-def _vertex_at(mesh, point: np.ndarray) -> np.ndarray:
-    scale = 1e-9 * (1.0 + float(np.abs(point).max()))
-    return dolfinx.mesh.locate_entities(
-        mesh, 0, lambda x: np.all(np.abs(x - point[:, None]) <= scale, axis=0)
-    )
