@@ -124,7 +124,24 @@ def hybrid_cantilever_problem(
     )
 
 
-def _tip_deflection(config, resolution, window, force, penalty, comm) -> tuple[float, HybridProblem, float]:
+def _tip_force(config: Config) -> float:
+    """The tip force [N] that turns the cantilever's tip by TIP_ROTATION by beam theory."""
+    tp = config.tape
+    return TIP_ROTATION * 2 * tp.E * theory.arc_second_moment(tp.R, tp.alpha, tp.h) / CANTILEVER_LENGTH**2
+
+
+def cantilever_tip_deflection(
+    config: Config,
+    resolution: MeshResolution,
+    window: float = WINDOW,
+    force: float | None = None,
+    penalty: float = PENALTY,
+    comm=MPI.COMM_WORLD,
+) -> tuple[float, HybridProblem, float]:
+    """The hybrid cantilever's tip deflection [m] under the tip ``force`` [N] (default: the
+    case's, a linear response), with the problem and the solve's wall time [s]."""
+    if force is None:
+        force = _tip_force(config)
     hybrid, tip = hybrid_cantilever_problem(config, resolution, window, penalty=penalty, comm=comm)
     hybrid.shell.clamp("xi1_min")
     hybrid.beam.end_load(tip, force=(0.0, 0.0, 1.0))
@@ -139,12 +156,16 @@ def hybrid_cantilever(config: Config, resolution: MeshResolution, comm=MPI.COMM_
     tp = config.tape
     EI = tp.E * theory.arc_second_moment(tp.R, tp.alpha, tp.h)
     L = CANTILEVER_LENGTH
-    force = TIP_ROTATION * 2 * EI / L**2
+    force = _tip_force(config)
     element = L / resolution.along
-    hybrid_tip, hybrid, hybrid_wall = _tip_deflection(config, resolution, WINDOW, force, PENALTY, comm)
+    hybrid_tip, hybrid, hybrid_wall = cantilever_tip_deflection(
+        config, resolution, WINDOW, force, PENALTY, comm
+    )
     gaps = hybrid.tie.gaps()
-    stiffer, _, _ = _tip_deflection(config, resolution, WINDOW, force, 10 * PENALTY, comm)
-    shell_tip, full, shell_wall = _tip_deflection(config, resolution, L - element, force, PENALTY, comm)
+    stiffer, _, _ = cantilever_tip_deflection(config, resolution, WINDOW, force, 10 * PENALTY, comm)
+    shell_tip, full, shell_wall = cantilever_tip_deflection(
+        config, resolution, L - element, force, PENALTY, comm
+    )
 
     turned, tip = hybrid_cantilever_problem(config, resolution, WINDOW, comm=comm, name="verify_hybrid_turn")
     turned.shell.turn("xi1_min", (0.0, 1.0, 0.0), (0.0, 0.0, 0.0))
