@@ -38,18 +38,19 @@ def director_rates(model, theta, theta_dot, theta_ddot=None):
 class DeploymentForms:
     """The equation of motion of the shell ``model`` with its ``contact``, stepped by ``integrator``.
 
-    ``energy`` is the potential (strain and contact) and ``internal`` its derivative, the internal
-    forces; ``translational`` and ``rotary`` the inertia per unit reference area of the
-    ``tape``'s section. :meth:`alpha` and :meth:`conserving` give each scheme's residual,
+    ``energy`` is the potential (strain and contact, unless the caller gives another, with the
+    energy of further bodies) and ``internal`` its derivative, the internal forces;
+    ``translational`` and ``rotary`` the inertia per unit reference area of the ``tape``'s section.
+    :meth:`alpha` and :meth:`conserving` give each scheme's residual,
     Jacobian and kinetic energy density, with the ``hold`` of the free end added to the residual.
     """
 
-    def __init__(self, model, integrator: GeneralizedAlpha, contact, tape: TapeConfig):
+    def __init__(self, model, integrator: GeneralizedAlpha, contact, tape: TapeConfig, energy=None):
         self.model, self.integrator, self.contact = model, integrator, contact
         rho, h = tape.density, tape.h
         self.translational = rho * h  # kg/m^2
         self.rotary = rho * h**3 / 12  # kg
-        self.energy = model.strain_energy + contact.energy
+        self.energy = model.strain_energy + contact.energy if energy is None else energy
         self.internal = ufl.derivative(self.energy, model.q, model.dq)
         # the conserving scheme's director velocity at the quadrature points (restart state)
         self.director_rate = None
