@@ -1,14 +1,22 @@
-"""Folds seeded with temporary cylinders, as Wilson et al. (2020) seed them: the wrap over
-them stalls (docs/regimes.md, "Seeded folds").
+"""Folds seeded with temporary cylinders, as Wilson et al. (2020) seed them (docs/regimes.md,
+"Seeded folds"): load-stepped, the wrap over them stalls; taken through in time, it passes.
 
 The wrapping study's wrap (``tapecoil.phases.wrapping``) with SEEDS rigid cylinders fixed to the
 hub at winding angles spread evenly over the wrap, of radius R, standing STANDOFF R off the hub:
 the tape is wound over them so that beside each one it leaves the hub and runs straight with its
 section unflattened, to be pressed flat onto the hub by the pull once the cylinders are gone,
-which is the mechanism of Eq. 2.9. Prints each converged step of the wrap and where it stopped.
+which is the mechanism of Eq. 2.9.
+
+Load-stepped (the default) the script prints each converged step of the wrap and where it
+stopped. With ``--dynamic`` the protocol is taken through its snaps in time
+(``tapecoil.phases.driven``): the hub turned over the seeds at a tape speed of ``--speed``, the
+seeds withdrawn over ``--withdraw-time`` with the end held, the end pulled at ``--pull-speed``
+until the centre line conforms over 305 degrees within 3 h. It prints the force then (the
+required tension), its mean and spread over the last ``--average`` seconds (the force carries the
+motion's oscillation), Eq. 2.9, the folds seen and the cost.
 
     tools/env.sh run env PYTHONPATH=solver python3 tools/seeded_wrap_study.py \
-        [RATIO SEEDS STANDOFF WRAP_PULL FREE_LENGTH ELEMENT_SIZE ACROSS]
+        [RATIO SEEDS STANDOFF WRAP_PULL FREE_LENGTH ELEMENT_SIZE ACROSS] [--dynamic ...]
 
 Defaults: the steel tape of demos/coiling_regimes.toml on r_c/R = 4.3, 2 seeds standing 0.5 R
 off, pulled by 0.2 of Eq. 2.9, 0.3 m free, 8 mm elements, 4 across.
@@ -108,19 +116,183 @@ STEEL = {
 }
 
 
+def quasi_static_wrap(model, study, comm) -> str:
+    """The wrapping study's load-stepped wrap over the seeds; how it ended."""
+    from tapecoil.core.stepping import ContinuationError
+    from tapecoil.phases import coiling_run
+
+    def show(row: dict) -> None:
+        if comm.rank == 0 and row["phase"] == "coil":
+            print(
+                f"hub angle {row['hub_angle']:.5f} rad: root tension {row['root_tension']:.4f} N, "
+                f"{row['newton_iterations']} Newton iterations, {row['wall_time']:.0f} s",
+                flush=True,
+            )
+
+    run = coiling_run.CoilingRun(model, on_step=show, max_step=study.wrap_step)
+    try:
+        run.flatten()
+        run.coil(model.config.coiling.hub_angle)
+        return "the wrap is complete"
+    except ContinuationError as err:
+        return f"the wrap stopped: {err}"
+
+
+def smoothstep(s: float) -> float:
+    s = min(max(s, 0.0), 1.0)
+    return s * s * (3.0 - 2.0 * s)
+
+
+def dynamic_wrap(model, seeds, study, options, comm) -> dict:
+    """Wilson et al.'s protocol taken through its snaps in time (:mod:`tapecoil.phases.driven`):
+    the hub turned over the seeds at the tape speed ``options.speed``, the seeds withdrawn over
+    ``options.withdraw_time`` with the end held, the end pulled at ``options.pull_speed`` until the
+    centre line conforms. Returns the readings."""
+    import time
+
+    import numpy as np
+
+    from tapecoil import theory
+    from tapecoil.core.dofs import global_size
+    from tapecoil.core.stepping import ContinuationError
+    from tapecoil.measures.wrap import wrap_measure
+    from tapecoil.phases import coiling_run
+    from tapecoil.phases.centre_line import edge_lines
+    from tapecoil.phases.driven import DrivenMotion
+    from tapecoil.phases.wrapping import EndDisplacement
+
+    cfg, tape = model.config, model.tape
+    tp, r_c = cfg.tape, cfg.hub.radius
+    rho = r_c + tp.h / 2
+    wrap = cfg.coiling.hub_angle
+    eq_2_9 = theory.coiling_tension_tension_dominated(cfg.wall.bending, tp.alpha, tp.R, rho)
+    t0 = time.perf_counter()
+    coiling_run.CoilingRun(model).flatten()
+
+    # the hub's angle: accelerated over `ramp` to the speed omega, then turned steadily
+    omega, ramp = options.speed / rho, 0.02
+
+    def hub_angle(t: float) -> float:
+        return omega * t * t / (2 * ramp) if t < ramp else omega * (t - ramp / 2)
+
+    motion = DrivenMotion(model, rho_inf=options.rho_inf, prefix="wrap_")
+    duration = wrap / omega + ramp / 2
+    motion.run(duration, lambda t: model.set_hub_angle(min(hub_angle(t), wrap)), options.dt)
+    model.set_hub_angle(wrap)
+    wrap_steps, wrap_iterations = motion.steps, motion.iterations
+    motion.destroy()
+    if comm.rank == 0:
+        print(
+            f"wrapped in {wrap_steps} steps, {wrap_iterations} Newton iterations, "
+            f"{time.perf_counter() - t0:.0f} s"
+        )
+
+    end = EndDisplacement(model)  # the end held where the wrap left it; the pull is off
+    motion = DrivenMotion(model, bcs=(end.bc,), rho_inf=options.rho_inf, prefix="pull_")
+    history = []
+
+    def read(stage: str, d: float) -> dict:
+        model.contact.update(wrap)
+        line = tape.centre_line()
+        edges = [(e["xi1"], e["radius"]) for e in edge_lines(tape)]
+        reading = wrap_measure(line["psi"], line["radius"], rho, tp.h, wrap, 3.0, line["xi1"], edges)
+        row = {
+            "stage": stage,
+            "time": motion.time,
+            "end_displacement": d,
+            "force": model.edge_forces()["tension"],
+            "kinetic_energy": motion.kinetic_energy(),
+            **reading,
+        }
+        history.append(row)
+        if comm.rank == 0 and len(history) % 10 == 0:
+            print(
+                f"{stage} t = {row['time']:.4f} s, d = {d * 1e3:.3f} mm: force {row['force']:.3f} N, "
+                f"conforms over {row['conforming_wrap_deg']:.1f} deg, {row['folds']} folds, "
+                f"{time.perf_counter() - t0:.0f} s",
+                flush=True,
+            )
+        return row
+
+    withdraw = options.withdraw_time
+    motion.run(
+        withdraw,
+        lambda t: seeds.withdraw(0.999 * smoothstep(t / withdraw)),
+        options.dt,
+        on_step=lambda step: read("withdraw", 0.0),
+    )
+
+    def end_at(t: float) -> float:
+        s = t - withdraw
+        return options.pull_speed * (s * s / (2 * ramp) if s < ramp else s - ramp / 2)
+
+    class Conformed(Exception):
+        pass
+
+    def pulled(step) -> None:
+        if read("pull", end_at(step.load))["conforming_wrap_deg"] >= study.conform_angle:
+            raise Conformed
+
+    required, message = None, ""
+    span = (options.max_pull + options.pull_speed * ramp / 2) / options.pull_speed
+    try:
+        motion.run(span, lambda t: end.set(end_at(t)), options.dt, on_step=pulled)
+        message = f"no conformity within {options.max_pull * 1e3:g} mm of pull"
+    except Conformed:
+        required = history[-1]["force"]
+    except ContinuationError as err:
+        message = f"stopped: {err}"
+    # the force oscillates with the motion: its mean over the last `average` seconds of the pull
+    recent = [
+        r["force"] for r in history if r["stage"] == "pull" and r["time"] >= motion.time - options.average
+    ]
+    most = max(history, key=lambda r: r["folds"])
+    radii = [r for row in history for r in row["fold_radii"]]
+    return {
+        "required_tension": required,
+        "mean_force": float(np.mean(recent)) if recent else None,
+        "force_spread": (float(min(recent)), float(max(recent))) if recent else None,
+        "eq_2_9": eq_2_9,
+        "max_folds": most["folds"],
+        "fold_radius_range": (min(radii) / tp.R, max(radii) / tp.R) if radii else None,
+        "pull": history[-1]["end_displacement"],
+        "wrap_steps": wrap_steps,
+        "wrap_newton_iterations": wrap_iterations,
+        "steps": motion.steps,
+        "newton_iterations": motion.iterations,
+        "dofs": global_size(model.model.W),
+        "wall_time": time.perf_counter() - t0,
+        "message": message,
+    }
+
+
 def main(argv: list[str]) -> None:
+    import argparse
+
     from mpi4py import MPI
 
     from tapecoil.config import config_from_dict
-    from tapecoil.core.stepping import ContinuationError
-    from tapecoil.phases import coiling_run
     from tapecoil.phases.coiling import CoilingModel
     from tapecoil.phases.tape_on_hub import TapeOnHub
     from tapecoil.phases.wrapping import WrapStudy, wrap_case
 
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "values", nargs="*", help="RATIO SEEDS STANDOFF WRAP_PULL FREE_LENGTH ELEMENT_SIZE ACROSS"
+    )
+    parser.add_argument("--dynamic", action="store_true", help="wrap, withdraw and pull in time")
+    parser.add_argument("--speed", type=float, default=0.5, help="tape speed of the wrap [m/s]")
+    parser.add_argument("--withdraw-time", type=float, default=0.05, help="time the seeds take to go [s]")
+    parser.add_argument("--pull-speed", type=float, default=0.05, help="speed of the end's pull [m/s]")
+    parser.add_argument("--max-pull", type=float, default=0.03, help="how far the end may be pulled [m]")
+    parser.add_argument("--dt", type=float, default=2e-4, help="largest time step [s]")
+    parser.add_argument("--rho-inf", type=float, default=0.3, help="generalized-alpha spectral radius")
+    parser.add_argument("--average", type=float, default=0.005, help="the force's averaging time [s]")
+    options = parser.parse_args(argv)
     defaults = [4.3, 2, 0.5, 0.2, 0.3, 0.008, 4]
+    given = options.values + [str(d) for d in defaults][len(options.values) :]
     ratio, seeds, standoff, pull, free, size, across = [
-        type(d)(a) for d, a in zip(defaults, argv + [str(d) for d in defaults][len(argv) :], strict=True)
+        type(d)(a) for d, a in zip(defaults, given, strict=True)
     ]
     comm = MPI.COMM_WORLD
     config = config_from_dict({**STEEL, "hub": {"radius": ratio * STEEL["tape"]["R"]}})
@@ -132,29 +304,20 @@ def main(argv: list[str]) -> None:
     angles = tuple(wrap * k / (seeds + 1) for k in range(1, seeds + 1))
     bodies = FoldSeeds(tape.model, tape.frame, tape.penalty, angles, R, standoff * R, tape.contact.smoothing)
     model = CoilingModel(case, comm, tape=tape, obstacles=(bodies,))
-
-    def show(row: dict) -> None:
-        if comm.rank == 0 and row["phase"] == "coil":
-            print(
-                f"hub angle {row['hub_angle']:.5f} rad: root tension {row['root_tension']:.4f} N, "
-                f"{row['newton_iterations']} Newton iterations, {row['wall_time']:.0f} s",
-                flush=True,
-            )
-
-    run = coiling_run.CoilingRun(model, on_step=show, max_step=study.wrap_step)
     if comm.rank == 0:
         print(
             f"r_c/R = {ratio}, {seeds} seeds at {[round(math.degrees(a)) for a in angles]} deg standing "
             f"{standoff} R off, pull {case.coiling.tension:.3f} N, {case.tape.L:.3f} m of tape"
         )
-    try:
-        run.flatten()
-        run.coil(wrap)
-        message = "the wrap is complete"
-    except ContinuationError as err:
-        message = f"the wrap stopped: {err}"
+    if not options.dynamic:
+        message = quasi_static_wrap(model, study, comm)
+        if comm.rank == 0:
+            print(message)
+        return
+    result = dynamic_wrap(model, bodies, study, options, comm)
     if comm.rank == 0:
-        print(message)
+        for key, value in result.items():
+            print(f"{key}: {value}")
 
 
 if __name__ == "__main__":
