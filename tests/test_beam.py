@@ -101,6 +101,7 @@ def test_a_strip_wound_onto_a_hub_carries_the_pull_less_the_configurational_forc
     assert_passed(run_case("beam-hub", load_config(), "coarse"))
 
 
+@pytest.mark.slow
 def test_turns_wound_on_turns_each_balance_the_pull_at_their_own_radius():
     """The strip wound almost three turns onto the hub and its own turns (the spiral obstacle,
     ``beam-turns``): on each turn the wrap's axial force N, read from its strains, is

@@ -242,7 +242,12 @@ def _tapecoil(*args, **kwargs):
 
 @pytest.mark.parametrize(
     ("phase", "after", "run"),
-    [("coiling", 3, SHORT_RUN), ("deployment", 5, SHORT_RUN), ("deployment", 5, FREE_HUB_RUN)],
+    [
+        ("coiling", 3, SHORT_RUN),
+        ("deployment", 5, SHORT_RUN),
+        # the free hub's restart state on top of the fixed hub's: make validate
+        pytest.param("deployment", 5, FREE_HUB_RUN, marks=pytest.mark.slow),
+    ],
     ids=["coiling", "deployment", "deployment-free-hub"],
 )
 def test_a_stopped_run_resumes_to_the_same_result(tmp_path, phase, after, run):

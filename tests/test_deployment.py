@@ -98,6 +98,7 @@ def test_release_unspools_the_tape_and_balances_energy(deployed_short):
     assert max(r["max_penetration"] for r in h) < 0.5 * model.config.tape.h
 
 
+@pytest.mark.slow
 def test_trapezoidal_rule_conserves_energy(stowed_short):
     """rho_inf = 1, the energy-conserving trapezoidal rule: no numerical dissipation, no growth.
 

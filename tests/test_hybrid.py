@@ -25,6 +25,7 @@ def coarse():
     return MeshResolution.from_config(MeshConfig(preset="coarse"), CANTILEVER_LENGTH)
 
 
+@pytest.mark.slow
 def test_hybrid_cantilever_matches_the_full_shell_and_turns_rigidly():
     """Tip deflection within 1 % of the full shell's, penalty converged, a rigid turn stress-free."""
     result = hybrid_cantilever(Config(), coarse())

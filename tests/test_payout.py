@@ -175,6 +175,7 @@ SHORT_PAYOUT = (
 )
 
 
+@pytest.mark.slow
 def test_a_stopped_payout_resumes_to_the_same_result(tmp_path):
     """SIGTERM during a payout: it stops after its step with paid_out/ written (exit 143), and
     tapecoil payout --resume finishes it with the history of a payout never stopped."""
