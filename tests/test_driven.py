@@ -24,6 +24,7 @@ def short_tape() -> Config:
 def driven_coil(comm, dt=1e-3):
     """Flattened quasi-statically, then the hub turned by ANGLE at the tape speed SPEED, eased in
     and out (a smoothstep in time), then held still as long again."""
+    from tapecoil.core.smoothing import smoothstep
     from tapecoil.phases.coiling import CoilingModel
     from tapecoil.phases.coiling_run import CoilingRun
     from tapecoil.phases.driven import DrivenMotion
@@ -35,8 +36,7 @@ def driven_coil(comm, dt=1e-3):
     duration = 1.5 * ANGLE * rho / SPEED  # the smoothstep's peak speed is 1.5 times its mean
 
     def turn(t):
-        s = min(t / duration, 1.0)
-        model.set_hub_angle(ANGLE * s * s * (3 - 2 * s))
+        model.set_hub_angle(ANGLE * float(smoothstep(t / duration)))
 
     motion.run(2 * duration, turn, dt)
     return model, motion

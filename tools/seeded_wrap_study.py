@@ -138,11 +138,6 @@ def quasi_static_wrap(model, study, comm) -> str:
         return f"the wrap stopped: {err}"
 
 
-def smoothstep(s: float) -> float:
-    s = min(max(s, 0.0), 1.0)
-    return s * s * (3.0 - 2.0 * s)
-
-
 def dynamic_wrap(model, seeds, study, options, comm) -> dict:
     """Wilson et al.'s protocol taken through its snaps in time (:mod:`tapecoil.phases.driven`):
     the hub turned over the seeds at the tape speed ``options.speed``, the seeds withdrawn over
@@ -154,14 +149,13 @@ def dynamic_wrap(model, seeds, study, options, comm) -> dict:
 
     from tapecoil import theory
     from tapecoil.core.dofs import global_size
+    from tapecoil.core.smoothing import smoothstep
     from tapecoil.core.stepping import ContinuationError
-    from tapecoil.measures.wrap import wrap_measure
     from tapecoil.phases import coiling_run
-    from tapecoil.phases.centre_line import edge_lines
     from tapecoil.phases.driven import DrivenMotion
-    from tapecoil.phases.wrapping import EndDisplacement
+    from tapecoil.phases.wrapping import EndDisplacement, wrap_reading
 
-    cfg, tape = model.config, model.tape
+    cfg = model.config
     tp, r_c = cfg.tape, cfg.hub.radius
     rho = r_c + tp.h / 2
     wrap = cfg.coiling.hub_angle
@@ -192,10 +186,7 @@ def dynamic_wrap(model, seeds, study, options, comm) -> dict:
     history = []
 
     def read(stage: str, d: float) -> dict:
-        model.contact.update(wrap)
-        line = tape.centre_line()
-        edges = [(e["xi1"], e["radius"]) for e in edge_lines(tape)]
-        reading = wrap_measure(line["psi"], line["radius"], rho, tp.h, wrap, 3.0, line["xi1"], edges)
+        reading = wrap_reading(model, wrap, study.tolerance)
         row = {
             "stage": stage,
             "time": motion.time,
@@ -217,7 +208,7 @@ def dynamic_wrap(model, seeds, study, options, comm) -> dict:
     withdraw = options.withdraw_time
     motion.run(
         withdraw,
-        lambda t: seeds.withdraw(0.999 * smoothstep(t / withdraw)),
+        lambda t: seeds.withdraw(0.999 * float(smoothstep(t / withdraw))),
         options.dt,
         on_step=lambda step: read("withdraw", 0.0),
     )

@@ -89,11 +89,11 @@ class CoilingModel:
 
         # the pull: T spread evenly over the free end's arc; its work is T times the end's mean u_x
         self.end_slide_form = dolfinx.fem.form(model.u[0] / tp.b * model.ds(FREE_END))
-        pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
+        self.pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
         self.obstacles = tuple(obstacles)
         self.energy = tape.energy + sum(o.energy for o in self.obstacles)
         self.viscosity, self.previous, viscous = model.relaxation(length_scale=self.element_length)
-        potential = self.energy - pull_work
+        potential = self.energy - self.pull_work
         self.residual_form = ufl.derivative(potential, model.q, model.dq)
         F = self.residual_form + viscous
         # the Jacobian is the Hessian of a potential (the pull is a dead load, contact a

@@ -23,7 +23,6 @@ from tapecoil.core.dofs import global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
 from tapecoil.core.timeint import GeneralizedAlpha
-from tapecoil.geometry.meshes import FREE_END
 from tapecoil.phases.coiling import CoilingModel
 from tapecoil.phases.deployment_forms import DeploymentForms
 
@@ -44,10 +43,7 @@ class DrivenMotion:
         shell, tape = model.model, model.tape
         self.integrator = ti = GeneralizedAlpha(shell.q, rho_inf)
         forms = DeploymentForms(shell, ti, tape.contact, model.config.tape, energy=model.energy)
-        pull = ufl.derivative(
-            model.tension * shell.u[0] / model.config.tape.b * shell.ds(FREE_END), shell.q, shell.dq
-        )
-        F, J, kinetic = forms.alpha(-pull)
+        F, J, kinetic = forms.alpha(-ufl.derivative(model.pull_work, shell.q, shell.dq))
         self.bcs = model.bcs + list(bcs)
         self.solver = SNESSolver.from_config(
             F,

@@ -155,6 +155,19 @@ def wrap_case(config: Config, study: WrapStudy, extra_length: float = 0.0) -> Co
     )
 
 
+def wrap_reading(model: CoilingModel, wrap: float, tolerance: float) -> dict:
+    """The wrap's conformity, folds and section rise at the current state, the hub at ``wrap``
+    [rad], within ``tolerance`` thicknesses (:func:`~tapecoil.measures.wrap.wrap_measure`;
+    collective). The winding angles are read from the state first: an end's motion draws
+    material round the hub."""
+    tape, h = model.tape, model.config.tape.h
+    model.contact.update(wrap)
+    line = tape.centre_line()
+    edges = [(e["xi1"], e["radius"]) for e in edge_lines(tape)]
+    rho = tape.r_hub + h / 2
+    return wrap_measure(line["psi"], line["radius"], rho, h, wrap, tolerance, line["xi1"], edges)
+
+
 class _Conformed(Exception):
     """The centre line conforms: the pull has found what it was looking for."""
 
@@ -183,13 +196,7 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
     history: list[dict] = []
 
     def measure(phase: str, d: float, iterations: int) -> dict:
-        # the winding angles from the state: the end's motion draws material round the hub
-        model.contact.update(wrap)
-        line = model.tape.centre_line()
-        edges = [(e["xi1"], e["radius"]) for e in edge_lines(model.tape)]
-        reading = wrap_measure(
-            line["psi"], line["radius"], rho, tp.h, wrap, study.tolerance, line["xi1"], edges
-        )
+        reading = wrap_reading(model, wrap, study.tolerance)
         forces = model.edge_forces()
         row = {
             "phase": phase,
