@@ -2,9 +2,10 @@
 # a host Python with DOLFINx >= 0.9, or a Debian root built on first use).
 #   make demo / make test      the two commands of the README
 #   make run CMD="..."         any command in the environment
-# The test targets run on each environment of SUITES in turn (tools/test-suites), provisioning
-# a missing Debian root first, and end with a summary; a failure in any suite fails them:
-#   make test                  serial and MPI suites on Debian trixie (DOLFINx 0.9), then sid (0.11)
+# The test targets run on each environment of SUITES (tools/test-suites: the serial selections
+# side by side, one per core, then the MPI ones in turn), provisioning a missing Debian root
+# first, and end with a summary; a failure in any suite fails them:
+#   make test                  serial and MPI suites on Debian trixie (DOLFINx 0.9) and sid (0.11)
 #   make test SUITES=trixie    one suite only (also: SUITES=sid, SUITES=host for the host Python)
 # SUITES defaults to $(TAPECOIL_SUITE) when that is set, to host when TAPECOIL_ENV=host.
 # The other targets use the one environment of tools/env.sh (TAPECOIL_SUITE, default trixie).

@@ -1,5 +1,12 @@
 """The compatibility layer on the installed DOLFINx (serial and under mpirun -n 2)."""
 
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -132,3 +139,41 @@ def test_offscreen_rendering(tmp_path):
     plotter.close()
     assert image.shape[:2] == (120, 160)
     assert (image[..., 0] > image[..., 2] + 50).any()  # the red sphere, not a blank picture
+
+
+def _xvfb_serving(display: str) -> list[int]:
+    """Process ids of the Xvfb processes on this machine that serve ``display``."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        try:
+            argv = (entry / "cmdline").read_bytes().split(b"\0")
+        except (OSError, ValueError):
+            continue
+        if argv and argv[0].endswith(b"Xvfb") and display.encode() in argv:
+            pids.append(int(entry.name))
+    return pids
+
+
+@pytest.mark.skipif(shutil.which("Xvfb") is None, reason="no Xvfb here")
+def test_private_xvfb_dies_with_its_process():
+    # Two processes at once get servers of their own, and a process killed outright (no
+    # clean-up of its own can run) leaves no server behind.
+    script = (
+        "import time; from tapecoil.core import compat;"
+        " print(compat.start_private_xvfb(), flush=True); time.sleep(60)"
+    )
+    owners = [
+        subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True) for _ in range(2)
+    ]
+    try:
+        displays = [owner.stdout.readline().strip() for owner in owners]
+        assert all(d.startswith(":") for d in displays) and displays[0] != displays[1]
+        assert all(len(_xvfb_serving(d)) == 1 for d in displays)
+    finally:
+        for owner in owners:
+            owner.send_signal(signal.SIGKILL)
+            owner.wait()
+    deadline = time.monotonic() + 10
+    while any(_xvfb_serving(d) for d in displays) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(_xvfb_serving(d) for d in displays)

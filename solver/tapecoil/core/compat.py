@@ -79,7 +79,10 @@ def start_offscreen_rendering() -> None:
     """Let PyVista render off screen when no X display is set (``DISPLAY`` empty).
 
     Debian trixie (DOLFINx 0.9) has PyVista 0.44 on VTK 9.3, whose render window needs an X
-    server: ``pyvista.start_xvfb()`` starts a virtual one. Debian sid (DOLFINx 0.11) has
+    server: a virtual one (Xvfb) is started for this process and stops with it. (PyVista's own
+    ``start_xvfb`` is not used: it starts a server on the fixed display :99 and leaves it
+    running, so a later process, or one in another root, can meet a stale or foreign server.)
+    Debian sid (DOLFINx 0.11) has
     PyVista 0.49, which no longer has ``start_xvfb`` (deprecated in 0.45, removed in 0.48), on
     VTK 9.6, which picks its render window at run time: there the EGL window is asked for
     directly (through ``VTK_DEFAULT_OPENGL_WINDOW``), which renders without any display and
@@ -95,12 +98,73 @@ def start_offscreen_rendering() -> None:
     if os.environ.get("DISPLAY") or os.environ.get("VTK_DEFAULT_OPENGL_WINDOW"):
         return
     if hasattr(pyvista, "start_xvfb"):  # PyVista < 0.48
-        pyvista.start_xvfb()
+        os.environ["DISPLAY"] = start_private_xvfb()
         return
     import vtkmodules.vtkRenderingOpenGL2 as gl
 
     if hasattr(gl, "vtkEGLRenderWindow"):
         os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
+
+
+def start_private_xvfb(screen: str = "1024x768x24", attempts: int = 64, timeout: float = 30.0) -> str:
+    """Start a virtual X server that belongs to this process and return its display (":N").
+
+    The server is asked to die with this process (Linux's parent-death signal), so none is
+    left running after an exit, a crash or a kill. Display numbers are tried from one derived
+    from the process id until a server starts: X refuses a number whose lock file or socket is
+    taken, and its sockets are shared by every process on the machine, chroots included. The
+    server reports readiness through ``-displayfd``, so no fixed wait is needed.
+    """
+    import atexit
+    import ctypes
+    import os
+    import select
+    import shutil
+    import signal
+    import subprocess
+
+    if shutil.which("Xvfb") is None:
+        raise RuntimeError("off-screen rendering on this PyVista needs Xvfb (Debian package xvfb)")
+    libc = ctypes.CDLL(None, use_errno=True)
+
+    def die_with_parent():
+        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+    first = 100 + os.getpid() % 800
+    for number in range(first, first + attempts):
+        read_end, write_end = os.pipe()
+        server = subprocess.Popen(
+            ["Xvfb", f":{number}", "-screen", "0", screen, "-nolisten", "tcp", "-displayfd", str(write_end)],
+            pass_fds=(write_end,),
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            preexec_fn=die_with_parent,
+        )
+        os.close(write_end)
+        reply = b""
+        with os.fdopen(read_end, "rb") as pipe:
+            while not reply.endswith(b"\n") and select.select([pipe], [], [], timeout)[0]:
+                chunk = os.read(pipe.fileno(), 64)
+                if not chunk:  # the server exited: this display is taken
+                    break
+                reply += chunk
+        if reply.strip() == str(number).encode():
+            atexit.register(_stop_server, server)
+            return f":{number}"
+        _stop_server(server)
+    raise RuntimeError(
+        f"no virtual X server could be started on displays :{first} to :{first + attempts - 1}"
+    )
+
+
+def _stop_server(server) -> None:
+    if server.poll() is None:
+        server.terminate()
+        try:
+            server.wait(timeout=10)
+        except Exception:  # pragma: no cover - a server that ignores SIGTERM
+            server.kill()
 
 
 def create_mesh(comm, cells, x, element, partitioner=None):
