@@ -12,6 +12,8 @@ numpy and scipy only, so that ``tapecoil theory`` starts without DOLFINx. By job
 - :mod:`~tapecoil.theory.coil_geometry`: turn radii, coiled length against hub rotation and coil
   radius, stored energy;
 - :mod:`~tapecoil.theory.coiling_tension`: the coiling regimes and their tension laws;
+- :mod:`~tapecoil.theory.edge_layer`: the free edges of a flattened coil (their lift, the
+  energy they relieve, what they add to the coiling tension);
 - :mod:`~tapecoil.theory.deployment`: the deployment rate, its closed forms and the ODE;
 - :mod:`~tapecoil.theory.table`: :class:`Prediction` and :func:`predictions`, the table.
 
@@ -48,6 +50,7 @@ from tapecoil.theory.deployment import (
     solve_deployment_ode,
     stowed_rotary_inertia,
 )
+from tapecoil.theory.edge_layer import EdgeLayer, coiling_tension_with_edges, edge_layer
 from tapecoil.theory.laminate import Bending, Wall, plane_stress_stiffness, ply_stiffness
 from tapecoil.theory.plate import (
     SENSES,
@@ -69,6 +72,7 @@ __all__ = [
     "UNIQUENESS_LIMIT",
     "Bending",
     "DeploymentSolution",
+    "EdgeLayer",
     "Prediction",
     "Wall",
     "arc_second_moment",
@@ -82,9 +86,11 @@ __all__ = [
     "coiling_tension_bending",
     "coiling_tension_growing",
     "coiling_tension_tension_dominated",
+    "coiling_tension_with_edges",
     "deployed_fraction",
     "deployment_time",
     "deployment_time_lambda0",
+    "edge_layer",
     "energy_density",
     "flexural_rigidity",
     "fold_moment",
