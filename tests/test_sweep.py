@@ -27,6 +27,7 @@ length = 0.1
 hub_angle = 1.0
 window = [0.5, 1.0]
 max_step = 0.1
+section_window = []
 """
 
 
@@ -108,6 +109,10 @@ WRAPPING = '[sweep]\nstudy = "wrapping"\n[sweep.parameters]\n"tape.h" = [1e-4]\n
             WRAPPING + "conform_angle = 350.0\n",
             r"conform_angle and wrap_angle",
         ),
+        (
+            '[sweep]\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.tension]\nsection_window = [1.0, 4.0]\n',
+            r"sweep\.tension: section_window = \[1\.0, 4\.0\]",
+        ),
     ],
 )
 def test_a_bad_sweep_is_refused_before_anything_runs(tmp_path, text, message):
@@ -175,7 +180,9 @@ def test_sweep_cases_on_sub_communicators_match_serial_runs(tmp_path):
         alone = coiling_tension(
             sweep.config(case),
             MPI.COMM_SELF,
-            TensionStudy(preset="coarse", length=0.1, hub_angle=1.0, window=(0.5, 1.0), max_step=0.1),
+            TensionStudy(
+                preset="coarse", length=0.1, hub_angle=1.0, window=(0.5, 1.0), max_step=0.1, section_window=()
+            ),
         )
         stored = json.loads(open(f"{directory}/out/{case_name(i, case)}/summary.json").read())
         assert stored["coiling_tension"]["computed"] == pytest.approx(alone["computed"], rel=1e-8)

@@ -157,7 +157,7 @@ def load_sweep(path: str | Path) -> Sweep:
             raise ConfigError(f"sweep.{key} is for study = {name!r} only")
         options[key] = values
     sweep = Sweep(study, data, parameters, ranks, options["tension"], options["wrapping"])
-    if study == "wrapping":
+    if study in STUDY_OPTIONS:
         sweep.study_options().check()
     config_from_dict(json.loads(json.dumps(data)))  # the base case itself
     for case in sweep.cases():

@@ -10,7 +10,8 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil import theory
-from tapecoil.config import Config
+from tapecoil.config import Config, ConfigError
+from tapecoil.measures.coil_section import CoilSection
 from tapecoil.phases.coiling import CoilingModel
 from tapecoil.phases.coiling_run import CoilingRun
 
@@ -27,6 +28,10 @@ class TensionStudy:
         preset: mesh preset.
         max_step: largest hub-angle step [rad]: a third of the node-passing period of the
             default mesh, so that the samples resolve the oscillation.
+        section_window: winding angles from the root [rad] of the stretch of coil whose own
+            sections are read at the end (away from the root's clamp and from the lift-off;
+            the stretch must be steady coil: on hubs below r_c/R = 0.7 the default 3 rad
+            leaves too little, see docs/regimes.md); empty: no such readings.
     """
 
     length: float = 0.12
@@ -35,6 +40,21 @@ class TensionStudy:
     excess: float = 0.6
     preset: str = "default"
     max_step: float = 0.05
+    section_window: tuple[float, ...] = (1.0, 2.0)
+
+    def check(self) -> None:
+        """Refuse windows that cannot give a reading, naming the key (``sweep.tension.*``)."""
+        bad = []
+        for name in ("window", "section_window"):
+            value = tuple(getattr(self, name))
+            if name == "section_window" and not value:
+                continue
+            if len(value) != 2 or not 0 <= value[0] < value[1] <= self.hub_angle:
+                bad.append(
+                    f"{name} = {list(value)}: needs two hub or winding angles 0 <= a < b <= hub_angle [rad]"
+                )
+        if bad:
+            raise ConfigError("sweep.tension: " + "; ".join(bad))
 
 
 def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | None = None) -> dict:
@@ -51,8 +71,15 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
     smoothing widths off the coil, which lowers the measured tension by about 0.03 N (0.185 N
     against 0.218 N at r_c/R = 0.9 with the default h/20; 0.2186 N with h/200 and 0.2190 N with
     the plain bracket). Eq. 2.9 (tension-dominated coiling) is reported beside it.
+
+    At the end, the coil's own sections over ``study.section_window`` are read
+    (:class:`~tapecoil.measures.coil_section.CoilSection`) against the flattened plate and its
+    free edges' boundary layer (:mod:`tapecoil.theory.edge_layer`): the energy per unit length,
+    the edges' lift, and the coiling tension T - N across those sections, which the root's
+    clamp (holding the whole width flat) does not read.
     """
     study = study or TensionStudy()
+    study.check()
     tp, r_c, bending = config.tape, config.hub.radius, config.wall.bending
     rho = r_c + tp.h / 2
     reference = theory.coiling_tension_bending(bending, tp.alpha, tp.R, rho)
@@ -73,6 +100,7 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
     rows = [r for r in run.result.history if r["phase"] == "coil" and lo <= r["hub_angle"] <= hi]
     values = np.array([r["coiling_tension"] for r in rows])
     measured = float(values.mean())
+    sections = coil_section_readings(model, study.section_window) if study.section_window else {}
     model.solver.destroy()
     return {
         "ratio": r_c / tp.R,
@@ -84,10 +112,35 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
         "error": abs(measured - reference) / reference,
         "tension_dominated_eq_2_9": theory.coiling_tension_tension_dominated(bending, tp.alpha, tp.R, rho),
         "spread": float(values.std()),
+        **sections,
         "samples": len(values),
         "max_penetration": max(r["max_penetration"] for r in run.result.history),
         "history": run.result.history,
         "wall_time": time.perf_counter() - t0,
+    }
+
+
+def coil_section_readings(model: CoilingModel, winding: tuple[float, float]) -> dict[str, float]:
+    """The coil's own sections between the winding angles ``winding`` [rad] at the current
+    state, against the flattened plate and the plate with its edge layers (collective)."""
+    config = model.config
+    tp, wall = config.tape, config.wall
+    rho = config.hub.radius + tp.h / 2
+    stiffness = wall.axial_modulus * wall.h
+    layer = theory.edge_layer(wall.bending, stiffness, tp.R, rho)
+    plate = tp.b * theory.energy_density(rho, tp.R, wall.bending)
+    section = CoilSection(model.tape)
+    pull = model.edge_forces()["tension"]
+    return {
+        "coil_energy_per_length": section.energy_per_length(winding),
+        "plate_energy_per_length": plate,
+        "edge_layer_energy_per_length": plate - layer.energy_relief,
+        "coil_section_tension": pull - section.axial_force(winding),
+        "reference_with_edges": theory.coiling_tension_with_edges(
+            wall.bending, stiffness, tp.alpha, tp.R, rho
+        ),
+        "edge_rise": section.edge_rise(winding),
+        "edge_rise_theory": layer.rise,
     }
 
 
