@@ -259,6 +259,11 @@ def _summarise(sweep: Sweep, cases: list[dict], directory: Path, groups: int) ->
                     "error": t["error"],
                     "eq_2_9": t["tension_dominated_eq_2_9"],
                     "spread": t["spread"],
+                    # the coil's own sections, against the plate with its free edges
+                    "coil_section_tension": t.get("coil_section_tension", ""),
+                    "eq_2_6_with_edges": t.get("reference_with_edges", ""),
+                    "coil_energy_per_length": t.get("coil_energy_per_length", ""),
+                    "edge_layer_energy_per_length": t.get("edge_layer_energy_per_length", ""),
                     "wall_time": t["wall_time"],
                 }
             )
@@ -322,8 +327,23 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
             yerr=[r["spread"] for r in rows],
             fmt="o",
             capsize=3,
-            label="shell: mean T - N over the steady phase (bar: spread)",
+            label="shell: T - N at the root's clamp, mean over the steady phase (bar: spread)",
         )
+        sections = [r for r in rows if r["coil_section_tension"] != ""]
+        if sections:
+            ax.plot(
+                [r["ratio"] for r in sections],
+                [r["eq_2_6_with_edges"] for r in sections],
+                "k-.",
+                label="Eq. 2.6 + the free edges' layers (theory.edge_layer)",
+            )
+            ax.plot(
+                [r["ratio"] for r in sections],
+                [r["coil_section_tension"] for r in sections],
+                "s",
+                mfc="none",
+                label="shell: T - N across the coil's own sections (steady stretch)",
+            )
         ax.set(xlabel="r_c / R", ylabel="coiling tension [N]", title="steady coiling tension")
     elif sweep.study == "wrapping":
         done = [r for r in rows if r["required_tension"] is not None]

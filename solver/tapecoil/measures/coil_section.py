@@ -71,15 +71,15 @@ class CoilSection:
         edges = edge_lines(tape)
         return 0.5 * (mean_radius(edges[0]) + mean_radius(edges[1])) - mean_radius(tape.centre_line())
 
-    def axial_force(self, winding: tuple[float, float]) -> float:
-        """Mean axial force N [N] (tension positive) across the sections of the stretch."""
+    def axial_force(self, winding: tuple[float, float]) -> np.ndarray:
+        """Axial force N [N] (tension positive) across each section of the stretch."""
         cut = self.sections()
         line = self.tape.centre_line()
         psi = np.interp(cut["xi1"], line["xi1"], line["psi"])
         inside = (psi >= winding[0]) & (psi <= winding[1])
         if not inside.any():
             raise ValueError(f"no section between winding angles {winding} rad")
-        return float(cut["axial_force"][inside].mean())
+        return cut["axial_force"][inside]
 
 
 def _vertex_columns(mesh, comm) -> np.ndarray:

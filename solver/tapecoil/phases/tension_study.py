@@ -29,18 +29,19 @@ class TensionStudy:
         max_step: largest hub-angle step [rad]: a third of the node-passing period of the
             default mesh, so that the samples resolve the oscillation.
         section_window: winding angles from the root [rad] of the stretch of coil whose own
-            sections are read at the end (away from the root's clamp and from the lift-off;
-            the stretch must be steady coil: on hubs below r_c/R = 0.7 the default 3 rad
-            leaves too little, see docs/regimes.md); empty: no such readings.
+            sections are read at the end, away from the root's clamp and from the lift-off.
+            It must be steady coil: with 3 rad coiled and (1, 2) the energy per unit length
+            on r_c/R = 0.5 is 4.8 % off the steady value (docs/regimes.md). Empty: no such
+            readings.
     """
 
-    length: float = 0.12
-    hub_angle: float = 3.0
+    length: float = 0.2
+    hub_angle: float = 5.5
     window: tuple[float, float] = (1.0, 3.0)
     excess: float = 0.6
     preset: str = "default"
     max_step: float = 0.05
-    section_window: tuple[float, ...] = (1.0, 2.0)
+    section_window: tuple[float, ...] = (2.0, 4.0)
 
     def check(self) -> None:
         """Refuse windows that cannot give a reading, naming the key (``sweep.tension.*``)."""
@@ -131,11 +132,13 @@ def coil_section_readings(model: CoilingModel, winding: tuple[float, float]) -> 
     plate = tp.b * theory.energy_density(rho, tp.R, wall.bending)
     section = CoilSection(model.tape)
     pull = model.edge_forces()["tension"]
+    axial = section.axial_force(winding)
     return {
         "coil_energy_per_length": section.energy_per_length(winding),
         "plate_energy_per_length": plate,
         "edge_layer_energy_per_length": plate - layer.energy_relief,
-        "coil_section_tension": pull - section.axial_force(winding),
+        "coil_section_tension": pull - float(axial.mean()),
+        "coil_section_spread": float(axial.std()),
         "reference_with_edges": theory.coiling_tension_with_edges(
             wall.bending, stiffness, tp.alpha, tp.R, rho
         ),
