@@ -110,8 +110,8 @@ WRAPPING = '[sweep]\nstudy = "wrapping"\n[sweep.parameters]\n"tape.h" = [1e-4]\n
             r"conform_angle and wrap_angle",
         ),
         (
-            '[sweep]\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.tension]\nsection_window = [1.0, 4.0]\n',
-            r"sweep\.tension: section_window = \[1\.0, 4\.0\]",
+            '[sweep]\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.tension]\nsection_window = [1.0, 6.0]\n',
+            r"sweep\.tension: section_window = \[1\.0, 6\.0\]",
         ),
     ],
 )
