@@ -10,6 +10,7 @@ Eq. 2.6 with and without the free edges' layers (theory.edge_layer).
 
     tools/env.sh run python3 tools/coil_energy_balance.py --ratio 0.9
     tools/env.sh run python3 tools/coil_energy_balance.py --config demos/coiling_tension_steel.toml
+    tools/env.sh run python3 tools/coil_energy_balance.py --ratio 0.8 --element-size 0.002
 """
 
 import argparse
@@ -34,6 +35,9 @@ parser.add_argument("--delta", type=float, default=0.05, help="step in r_c/R to 
 parser.add_argument("--length", type=float, default=0.2, help="length of the piece [m]")
 parser.add_argument("--angle", type=float, default=5.5, help="hub angle coiled [rad]")
 parser.add_argument("--stretch", type=float, nargs=2, default=(1.0, 3.5), help="winding angles [rad]")
+parser.add_argument(
+    "--element-size", type=float, default=0.0, help="element length along the tape [m] (0: the preset's)"
+)
 args = parser.parse_args()
 
 if args.config and "sweep" in tomllib.loads(Path(args.config).read_text()):
@@ -53,6 +57,7 @@ for ratio in (args.ratio - args.delta, args.ratio, args.ratio + args.delta):
         hub=dataclasses.replace(base.hub, radius=r_c),
         coiling=dataclasses.replace(base.coiling, hub_angle=args.angle, tension=pull),
         contact=dataclasses.replace(base.contact, smoothing=0.0),
+        mesh=dataclasses.replace(base.mesh, element_size=args.element_size or base.mesh.element_size),
     )
     model = CoilingModel(case, comm)
     run = CoilingRun(model, max_step=0.05)

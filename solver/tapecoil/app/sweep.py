@@ -307,6 +307,11 @@ def _summarise(sweep: Sweep, cases: list[dict], directory: Path, groups: int) ->
     return out
 
 
+def _against_ratio(ax, rows: list[dict], key: str, fmt: str, label: str, **style) -> None:
+    """One column of the rows against r_c/R."""
+    ax.plot([r["ratio"] for r in rows], [r[key] for r in rows], fmt, label=label, **style)
+
+
 def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
     import matplotlib
 
@@ -331,34 +336,38 @@ def _plot(sweep: Sweep, rows: list[dict], directory: Path) -> Path:
         )
         sections = [r for r in rows if r["coil_section_tension"] != ""]
         if sections:
-            ax.plot(
-                [r["ratio"] for r in sections],
-                [r["eq_2_6_with_edges"] for r in sections],
+            _against_ratio(
+                ax,
+                sections,
+                "eq_2_6_with_edges",
                 "k-.",
-                label="Eq. 2.6 + the free edges' layers (theory.edge_layer)",
+                "Eq. 2.6 + the free edges' layers (theory.edge_layer)",
             )
-            ax.plot(
-                [r["ratio"] for r in sections],
-                [r["coil_section_tension"] for r in sections],
+            _against_ratio(
+                ax,
+                sections,
+                "coil_section_tension",
                 "s",
+                "shell: T - N across the coil's own sections (steady stretch)",
                 mfc="none",
-                label="shell: T - N across the coil's own sections (steady stretch)",
             )
         ax.set(xlabel="r_c / R", ylabel="coiling tension [N]", title="steady coiling tension")
     elif sweep.study == "wrapping":
         done = [r for r in rows if r["required_tension"] is not None]
-        ax.plot(
-            [r["ratio"] for r in done],
-            [r["required_tension"] for r in done],
+        _against_ratio(
+            ax,
+            done,
+            "required_tension",
             "o",
-            label="shell: force on the end when the centre line conforms over 305 deg (wrapping)",
+            "shell: force on the end when the centre line conforms over 305 deg (wrapping)",
         )
-        ax.plot(
-            [r["ratio"] for r in done],
-            [r["lift_off_tension"] for r in done],
+        _against_ratio(
+            ax,
+            done,
+            "lift_off_tension",
             "o",
+            "shell: the same, less the axial force the clamped root holds (T - N)",
             mfc="none",
-            label="shell: the same, less the axial force the clamped root holds (T - N)",
         )
         for r in done:
             if r["max_folds"]:
