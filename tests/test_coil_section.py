@@ -58,3 +58,12 @@ def test_steady_coil_carries_the_edge_layers_on_two_ranks():
     _check(result)
     for key in ("coil_energy_per_length", "coil_section_tension", "edge_rise"):
         assert result[key] == pytest.approx(serial[key], rel=1e-6), key
+
+
+def test_equal_sense_is_refused_before_anything_runs():
+    from tapecoil.config import ConfigError
+
+    config = _steel_on_hub(0.9)
+    config = dataclasses.replace(config, coiling=dataclasses.replace(config.coiling, sense="equal"))
+    with pytest.raises(ConfigError, match=r"section_window.*opposite-sense"):
+        coiling_tension(config, MPI.COMM_SELF, SHORT)

@@ -81,6 +81,11 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
     """
     study = study or TensionStudy()
     study.check()
+    if study.section_window and config.coiling.sense != "opposite":
+        raise ConfigError(
+            "sweep.tension.section_window: the free edges' layer (theory.edge_layer) is derived for"
+            " opposite-sense coils; set section_window = [] with coiling.sense = 'equal'"
+        )
     tp, r_c, bending = config.tape, config.hub.radius, config.wall.bending
     rho = r_c + tp.h / 2
     reference = theory.coiling_tension_bending(bending, tp.alpha, tp.R, rho)
