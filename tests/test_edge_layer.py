@@ -85,3 +85,30 @@ def test_tension_is_the_configurational_balance_of_the_relieved_energy(ratio):
 def test_edge_layer_refuses_non_physical_input():
     with pytest.raises(ValueError, match="rho, R and the axial stiffness"):
         th.edge_layer(BENDING, S, R, 0.0)
+
+
+@pytest.mark.parametrize(
+    ("hub", "sense", "listed"),
+    [(0.0127, "opposite", True), (0.0127, "equal", False), (0.0604, "opposite", False)],
+)
+def test_the_theory_table_lists_the_edges_for_a_flattened_opposite_sense_coil(hub, sense, listed):
+    from tapecoil.config import config_from_dict
+
+    cfg = config_from_dict(
+        {
+            "hub": {"radius": hub},
+            "coiling": {"hub_angle": 5.0, "tension": 10.0, "sense": sense},
+        }
+    )
+    p = {x.key: x for x in th.predictions(cfg)}
+    assert ("coiling_tension_edges" in p) == listed
+    if listed:  # the benchmark's hub: Eq. 2.6 at the first turn's mid-surface plus the edges
+        rho = cfg.hub.radius + cfg.tape.h / 2
+        bending, stiffness = cfg.wall.bending, cfg.wall.axial_modulus * cfg.wall.h
+        layer = th.edge_layer(bending, stiffness, cfg.tape.R, rho)
+        assert p["coiling_tension_edges"].value == pytest.approx(
+            th.coiling_tension_bending(bending, cfg.tape.alpha, cfg.tape.R, rho) + layer.tension_rise,
+            rel=1e-12,
+        )
+        assert p["coiling_tension_edges"].value == pytest.approx(0.4561, abs=1e-4)
+        assert p["edge_rise"].value == pytest.approx(layer.rise) and p["edge_relief"].value > 0

@@ -21,6 +21,7 @@ from tapecoil.theory.coiling_tension import (
     coiling_tension_tension_dominated,
 )
 from tapecoil.theory.deployment import deployment_time, seffen_rate, solve_deployment_ode
+from tapecoil.theory.edge_layer import coiling_tension_with_edges, edge_layer
 from tapecoil.theory.plate import (
     arc_second_moment,
     coil_energy_at_R,
@@ -156,6 +157,26 @@ def predictions(config: Config) -> list[Prediction]:
     if regime in tension_laws:
         law, source = tension_laws[regime]
         out.append(P("coiling_tension", "coiling tension", law(bending, tp.alpha, tp.R, r_hub), "N", source))
+    if regime == "bending" and sense == "opposite":
+        # the flattened first turn's free edges (mid-surface radius): what the plate leaves out
+        layer = edge_layer(bending, wall.axial_modulus * wall.h, tp.R, rho_first)
+        out += [
+            P(
+                "coiling_tension_edges",
+                "coiling tension with the free edges' layers, mid-surface radius",
+                coiling_tension_with_edges(bending, wall.axial_modulus * wall.h, tp.alpha, tp.R, rho_first),
+                "N",
+                "Eq. 2.6 + edge layer",
+            ),
+            P("edge_rise", "free edges' lift off the flattened first turn", layer.rise, "m", "edge layer"),
+            P(
+                "edge_relief",
+                "energy per length the free edges relieve",
+                layer.energy_relief,
+                "J/m",
+                "edge layer",
+            ),
+        ]
     out += [
         P("T_deploy_hub", "deployment time, r = r_hub", deployment_time(k_hub), "s", "Eq. 2.23"),
         P("t90_hub", "time to lambda = 0.9, r = r_hub", deployment_time(k_hub, 0.9), "s", "Eq. 2.20"),
