@@ -88,8 +88,22 @@ def test_payout_turns_the_hub_back_to_the_deployed_fraction(paid_out):
     assert payout["measures"]["lambda_start"] < payout["measures"]["lambda_end"] - 0.1
     rows = (directory / "payout_history.csv").read_text().splitlines()
     header = rows[0].split(",")
-    for key in ("coiling_tension_outer", "eq_4_5", "steady_torque", "hub_torque_reaction", "lambda"):
+    for key in (
+        "coiling_tension_outer",
+        "eq_4_5",
+        "eq_2_6_edges_outer",
+        "steady_torque",
+        "hub_torque_reaction",
+    ):
         assert key in header
+    # the outer turn's law with its free edges' share lies above the plate's, band by band
+    m = payout["measures"]
+    plate, edges = (
+        m["outer_turn_tension_vs_eq_2_6"]["bands"],
+        m["outer_turn_tension_vs_eq_2_6_edges"]["bands"],
+    )
+    assert len(edges) == len(plate) >= 2
+    assert all(e["reference"] > p["reference"] for e, p in zip(edges, plate, strict=True))
     angles = [float(r.split(",")[header.index("hub_angle")]) for r in rows[1:]]
     assert np.all(np.diff(angles) < 0)
     assert (directory / "paid_out" / "meta.json").is_file()

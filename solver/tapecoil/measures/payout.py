@@ -11,6 +11,9 @@ The laws (physics brief Sec. 5 and 10), with rho a turn's mid-surface radius:
   tape comes off the coil, and equals the first turn's at lambda = 1;
 - by the configurational force balance T - N = T_c(rho) wherever the tape lies flat on a turn of
   radius rho, so at the root it is T_c(r_hub + h/2) whatever lambda;
+- a shell's coil is flattened but for its free edges' boundary layer, which adds its share to
+  T_c (:mod:`tapecoil.theory.edge_layer`, opposite sense): T_c + Delta T at the outer turn;
+  the root's clamp holds the whole width flat and reads T_c;
 - steady coiling's hub torque, from the energy balance of a step: rho (T + b w(rho)), rho the
   outermost turn's radius, where the tape comes on or off.
 
@@ -47,6 +50,15 @@ def tension_law(rho, config) -> float | np.ndarray:
     return theory.coiling_tension_bending(config.wall.bending, tp.alpha, tp.R, rho)
 
 
+def tension_law_with_edges(rho: float, config) -> float | str:
+    """Eq. 2.6 plus the free edges' share at the mid-surface radius rho [m] [N]; empty for an
+    equal-sense coil, for which the edge layer is not derived."""
+    if config.coiling.sense != "opposite":
+        return ""
+    tp, wall = config.tape, config.wall
+    return theory.coiling_tension_with_edges(wall.bending, wall.axial_modulus * wall.h, tp.alpha, tp.R, rho)
+
+
 def eq_4_5(lam, config) -> float | np.ndarray:
     """Eq. 4.5 with the mid-surface radius rho(lambda) of the coil where the tape leaves it [N]."""
     tp = config.tape
@@ -77,6 +89,7 @@ OUTER_TURN_COLUMNS = (
     "outer_turn_radius",
     "coiling_tension_outer",
     "eq_2_6_outer",
+    "eq_2_6_edges_outer",
     "eq_4_5",
     "steady_torque",
 )
@@ -105,6 +118,7 @@ def outer_turn_tension(tape, sections, pull: float, lam: float, angle: float) ->
         "outer_turn_radius": rho,
         "coiling_tension_outer": pull - float(sections["axial_force"][k]),
         "eq_2_6_outer": float(tension_law(rho, config)),
+        "eq_2_6_edges_outer": tension_law_with_edges(rho, config),
         "eq_4_5": float(eq_4_5(lam, config)),
         "steady_torque": steady_torque(rho, pull, config),
     }
@@ -130,13 +144,18 @@ def _band(rows: list[dict], lo: float, hi: float, key: str, reference) -> dict |
 def payout_measures(config, history: list[dict]) -> dict:
     """The payout's summary: per band of lambda (0.1 wide, from the lowest band reached to 0.9),
     the mean and spread of the outer turn's T - N against Eq. 4.5 and against Eq. 2.6 at its
-    measured radius, of the root's T - N against Eq. 2.6 at the first turn, and of the hub torque
-    from the reactions against steady coiling; and the largest error of each over the bands."""
+    measured radius without and with its free edges' share, of the root's T - N against Eq. 2.6
+    at the first turn, and of the hub torque from the reactions against steady coiling; and the
+    largest error of each over the bands."""
     tp = config.tape
     root_law = float(tension_law(config.hub.radius + tp.h / 2, config))
     quantities = {
         "outer_turn_tension_vs_eq_4_5": ("coiling_tension_outer", lambda r: r["eq_4_5"]),
         "outer_turn_tension_vs_eq_2_6": ("coiling_tension_outer", lambda r: r["eq_2_6_outer"]),
+        "outer_turn_tension_vs_eq_2_6_edges": (
+            "coiling_tension_outer",
+            lambda r: r.get("eq_2_6_edges_outer", ""),
+        ),
         "root_tension_vs_eq_2_6": ("coiling_tension", lambda r: root_law),
         "hub_torque_vs_steady": ("hub_torque_reaction", lambda r: r["steady_torque"]),
     }

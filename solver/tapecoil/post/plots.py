@@ -348,6 +348,14 @@ def payout_forces(directory: Path) -> Path | None:
     ax[0].plot(lam, h["coiling_tension_outer"], ".", ms=3, label="T - N on the outer turn (shell)")
     ax[0].plot(lam[order], h["eq_4_5"][order], "k-", lw=1.2, label="Eq. 4.5, mid-surface radius rho(lambda)")
     ax[0].plot(lam, h["eq_2_6_outer"], "k:", lw=1, label="Eq. 2.6 at the outer turn's measured radius")
+    if "eq_2_6_edges_outer" in h and np.isfinite(h["eq_2_6_edges_outer"]).any():
+        ax[0].plot(
+            lam,
+            h["eq_2_6_edges_outer"],
+            "k-.",
+            lw=1,
+            label="the same with the free edges' share (edge layer)",
+        )
     ax[0].plot(lam, h["coiling_tension"], ".", ms=3, label="T - N at the root (shell)")
     rho = config.hub.radius + tp.h / 2
     root = theory.coiling_tension_bending(config.wall.bending, tp.alpha, tp.R, rho)
