@@ -92,6 +92,7 @@ def test_payout_turns_the_hub_back_to_the_deployed_fraction(paid_out):
         "coiling_tension_outer",
         "eq_4_5",
         "eq_2_6_edges_outer",
+        "lambda",
         "steady_torque",
         "hub_torque_reaction",
     ):
