@@ -104,7 +104,8 @@ def coiling_energies(directory: Path) -> Path | None:
 
 
 def coiling_forces(directory: Path) -> Path | None:
-    """Tension at the free end, coiling tension T - N against Eq. 2.6, hub torque against steady coiling."""
+    """Tension at the free end, coiling tension T - N against Eq. 2.6 (and, on the outer turn,
+    against Eq. 4.5 and Eq. 2.6 with the free edges' share), hub torque against steady coiling."""
     h = _coiling_rows(directory)
     if h is None or len(h["hub_angle"]) == 0:
         return None
@@ -119,6 +120,10 @@ def coiling_forces(directory: Path) -> Path | None:
     if "coiling_tension_outer" in h:  # read across the outer turn's sections
         ax[0].plot(angle, h["coiling_tension_outer"], label="coiling tension T - N on the outer turn")
         ax[0].plot(angle, h["eq_4_5"], "k:", label="Eq. 4.5, the coil's mid-surface radius rho(lambda)")
+        if "eq_2_6_edges_outer" in h and np.isfinite(h["eq_2_6_edges_outer"]).any():
+            ax[0].plot(
+                angle, h["eq_2_6_edges_outer"], "k-.", label="Eq. 2.6 + the free edges' share, outer turn"
+            )
     elif "coiled_length" in h:
         growing = theory.coiling_tension_growing(
             1.0 - h["coiled_length"] / tp.L, config.wall.bending, tp.alpha, tp.R, r_hub, tp.h, tp.L
