@@ -104,7 +104,7 @@ def test_the_theory_table_lists_the_edges_for_a_flattened_opposite_sense_coil(hu
     assert ("coiling_tension_edges" in p) == listed
     if listed:  # the benchmark's hub: Eq. 2.6 at the first turn's mid-surface plus the edges
         rho = cfg.hub.radius + cfg.tape.h / 2
-        bending, stiffness = cfg.wall.bending, cfg.wall.axial_modulus * cfg.wall.h
+        bending, stiffness = cfg.wall.bending, cfg.wall.axial_stiffness
         layer = th.edge_layer(bending, stiffness, cfg.tape.R, rho)
         assert p["coiling_tension_edges"].value == pytest.approx(
             th.coiling_tension_bending(bending, cfg.tape.alpha, cfg.tape.R, rho) + layer.tension_rise,

@@ -46,7 +46,7 @@ else:
     base = load_config(args.config or None)
 comm = MPI.COMM_WORLD
 tp, wall = dataclasses.replace(base.tape, L=args.length), base.wall
-stiffness = wall.axial_modulus * wall.h
+stiffness = wall.axial_stiffness
 curvature, energy = [], []
 for ratio in (args.ratio - args.delta, args.ratio, args.ratio + args.delta):
     r_c = ratio * tp.R

@@ -56,7 +56,7 @@ def tension_law_with_edges(rho: float, config) -> float | str:
     if config.coiling.sense != "opposite":
         return ""
     tp, wall = config.tape, config.wall
-    return theory.coiling_tension_with_edges(wall.bending, wall.axial_modulus * wall.h, tp.alpha, tp.R, rho)
+    return theory.coiling_tension_with_edges(wall.bending, wall.axial_stiffness, tp.alpha, tp.R, rho)
 
 
 def eq_4_5(lam, config) -> float | np.ndarray:

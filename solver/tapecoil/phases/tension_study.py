@@ -132,7 +132,7 @@ def coil_section_readings(model: CoilingModel, winding: tuple[float, float]) -> 
     config = model.config
     tp, wall = config.tape, config.wall
     rho = config.hub.radius + tp.h / 2
-    stiffness = wall.axial_modulus * wall.h
+    stiffness = wall.axial_stiffness
     layer = theory.edge_layer(wall.bending, stiffness, tp.R, rho)
     plate = tp.b * theory.energy_density(rho, tp.R, wall.bending)
     section = CoilSection(model.tape)

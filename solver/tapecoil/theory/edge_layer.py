@@ -92,8 +92,8 @@ def edge_layer(bending: Bending, axial_stiffness: float, R: float, rho: float) -
 
     ``bending``: the wall's rigidities (D22, D12 enter); ``axial_stiffness``: S [N/m], the
     force per unit width that stretches the wall along the tape by a unit strain with its width
-    free to contract (E h for an isotropic wall, :attr:`Wall.axial_modulus` times h for a
-    laminate); ``R``: the section's radius [m].
+    free to contract (:attr:`Wall.axial_stiffness`: E h for an isotropic wall); ``R``: the
+    section's radius [m].
     """
     if rho <= 0 or R <= 0 or axial_stiffness <= 0:
         raise ValueError(

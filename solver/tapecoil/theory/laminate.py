@@ -174,10 +174,16 @@ class Wall:
         return Bending(float(d[0, 0]), float(d[0, 1]), float(d[1, 1]), float(d[2, 2]))
 
     @property
+    def axial_stiffness(self) -> float:
+        """1 / (A^-1)_11 [N/m]: the force per unit width that stretches the wall along the tape by
+        a unit strain with its width free to contract (E h for an isotropic wall)."""
+        return float(1.0 / np.linalg.inv(self.A)[0, 0])
+
+    @property
     def axial_modulus(self) -> float:
-        """1 / (h (A^-1)_11) [Pa]: the modulus of a strip pulled along its length with its width
-        free to contract (E for an isotropic wall), the E of beam formulas."""
-        return float(1.0 / (self.h * np.linalg.inv(self.A)[0, 0]))
+        """:attr:`axial_stiffness` / h [Pa]: the modulus of a strip pulled along its length with
+        its width free to contract (E for an isotropic wall), the E of beam formulas."""
+        return self.axial_stiffness / self.h
 
     def stiffness_at(self, z: float) -> np.ndarray:
         """Q [Pa] of the ply at depth z (the lower ply at an interface; z = +-h/2 is a face's)."""

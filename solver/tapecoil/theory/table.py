@@ -159,12 +159,12 @@ def predictions(config: Config) -> list[Prediction]:
         out.append(P("coiling_tension", "coiling tension", law(bending, tp.alpha, tp.R, r_hub), "N", source))
     if regime == "bending" and sense == "opposite":
         # the flattened first turn's free edges (mid-surface radius): what the plate leaves out
-        layer = edge_layer(bending, wall.axial_modulus * wall.h, tp.R, rho_first)
+        layer = edge_layer(bending, wall.axial_stiffness, tp.R, rho_first)
         out += [
             P(
                 "coiling_tension_edges",
                 "coiling tension with the free edges' layers, mid-surface radius",
-                coiling_tension_with_edges(bending, wall.axial_modulus * wall.h, tp.alpha, tp.R, rho_first),
+                coiling_tension_with_edges(bending, wall.axial_stiffness, tp.alpha, tp.R, rho_first),
                 "N",
                 "Eq. 2.6 + edge layer",
             ),
