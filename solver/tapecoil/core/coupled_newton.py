@@ -32,7 +32,7 @@ from tapecoil.core.convergence import ResidualTest
 from tapecoil.core.newton import SolveResult, assemble_residual, create_snes, run_snes
 from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix
 
-__all__ = ["Block", "CoupledSNESSolver", "DofCoupling", "JointState"]
+__all__ = ["Block", "CoupledSNESSolver", "CouplingGroup", "DofCoupling", "JointState"]
 
 
 @dataclass
@@ -140,6 +140,49 @@ class DofCoupling:
         return out
 
 
+class CouplingGroup:
+    """Several :class:`DofCoupling` s of distinct parameters acting as one (a shell tied at both
+    of its ends): their energies add, their parameters are listed one coupling after the other,
+    and no energy depends on another's parameters, so the Hessian is block diagonal."""
+
+    def __init__(self, couplings):
+        self.couplings = list(couplings)
+        if not self.couplings:
+            raise ValueError("a coupling group needs at least one coupling")
+        self.dofs = np.concatenate([c.dofs for c in self.couplings])
+        self.owned = np.concatenate([c.owned for c in self.couplings])
+        self.global_dofs = np.concatenate([c.global_dofs for c in self.couplings])
+        if len(np.unique(self.global_dofs)) != len(self.global_dofs):
+            raise ValueError("a coupling group's couplings must not share a parameter")
+        self.cells = np.unique(np.concatenate([c.cells for c in self.couplings]))
+        self.residual0 = sum((c.residual0 for c in self.couplings[1:]), self.couplings[0].residual0)
+        self.jacobian0 = sum((c.jacobian0 for c in self.couplings[1:]), self.couplings[0].jacobian0)
+
+    def read(self) -> None:
+        for c in self.couplings:
+            c.read()
+
+    def gradient(self) -> np.ndarray:
+        return np.concatenate([c.gradient() for c in self.couplings])
+
+    def hessian(self) -> np.ndarray:
+        n = len(self.dofs)
+        H, start = np.zeros((n, n)), 0
+        for c in self.couplings:
+            k = len(c.dofs)
+            H[start : start + k, start : start + k] = c.hessian()
+            start += k
+        return H
+
+    def mixed_vectors(self) -> list:
+        return [v for c in self.couplings for v in c.mixed_vectors()]
+
+    def energy(self) -> float:
+        """The couplings' energy [J] at the current states (collective)."""
+        self.read()
+        return sum(c._scalar(c.energy) for c in self.couplings)
+
+
 class JointState:
     """The states of both blocks as one, for :class:`~tapecoil.core.stepping.Continuation`
     (which saves a converged state and returns to it)."""
@@ -159,14 +202,23 @@ class JointState:
 
 
 class CoupledSNESSolver:
-    """Newton for two :class:`Block` s joined by a :class:`DofCoupling` (see the module).
+    """Newton for two :class:`Block` s joined by a :class:`DofCoupling` or a :class:`CouplingGroup`
+    (see the module).
 
     ``prefix``, ``options``, ``rtol``, ``atol``, ``max_it``: as
     :class:`~tapecoil.core.newton.SNESSolver`'s; the command line's options under the prefix win.
     """
 
     def __init__(
-        self, blocks, coupling: DofCoupling, *, prefix, options=None, rtol=1e-8, atol=1e-10, max_it=25
+        self,
+        blocks,
+        coupling: DofCoupling | CouplingGroup,
+        *,
+        prefix,
+        options=None,
+        rtol=1e-8,
+        atol=1e-10,
+        max_it=25,
     ):
         check_prefix(prefix)
         if len(blocks) != 2:
@@ -191,7 +243,7 @@ class CoupledSNESSolver:
             for blk in blocks
         )
         c = len(coupling.dofs)
-        self.C = PETSc.Mat().createAIJ(((n0, N0), (n1, N1)), nnz=c, comm=comm)
+        self.C = PETSc.Mat().createAIJ(((n0, N0), (n1, N1)), nnz=(c, c), comm=comm)
         self.C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         self.C.setUp()
         self._fill_coupling_block(np.zeros((len(self._rows), c)))

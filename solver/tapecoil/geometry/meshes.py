@@ -107,19 +107,20 @@ def build_strip_gmsh(geom: StripGeometry, res: MeshResolution) -> None:
 
     A structured quadrilateral mesh: ``res.across`` elements across, ``res.along`` along
     (element length growing by ``res.grading`` from root to free end). Physical groups: the
-    surface (STRIP) and the edges ROOT (x = 0), FREE_END (x = L), SIDE_NEG and SIDE_POS.
+    surface (STRIP) and the edges ROOT (x = start), FREE_END (x = start + L), SIDE_NEG and SIDE_POS.
     """
     import gmsh
 
     occ = gmsh.model.occ
     half = geom.width / 2
+    x0 = geom.start
     if geom.flat:
-        p = [occ.addPoint(0, s, 0) for s in (-half, half)]
+        p = [occ.addPoint(x0, s, 0) for s in (-half, half)]
         section = occ.addLine(p[0], p[1])
     else:
         # arc in the y-z plane, centre (0, 0, R), from xi_2 = -b/2 to +b/2
-        ends = geom.phi0(np.array([[0.0, 0.0], [-half, half]]))
-        centre = occ.addPoint(0, 0, geom.R)
+        ends = geom.phi0(np.array([[x0, x0], [-half, half]]))
+        centre = occ.addPoint(x0, 0, geom.R)
         p = [occ.addPoint(*ends[:, i]) for i in range(2)]
         section = occ.addCircleArc(p[0], centre, p[1])
         occ.remove([(0, centre)])
@@ -131,16 +132,16 @@ def build_strip_gmsh(geom: StripGeometry, res: MeshResolution) -> None:
     edges = {}
     for _, tag in gmsh.model.getBoundary([(2, surface)], oriented=False):
         cx, cy, _cz = occ.getCenterOfMass(1, tag)
-        if abs(cx) < 1e-9 * geom.length:
+        if abs(cx - x0) < 1e-9 * geom.length:
             edges[ROOT] = tag
-        elif abs(cx - geom.length) < 1e-9 * geom.length:
+        elif abs(cx - x0 - geom.length) < 1e-9 * geom.length:
             edges[FREE_END] = tag
         else:
             edges[SIDE_NEG if cy < 0 else SIDE_POS] = tag
     if len(edges) != 4:  # pragma: no cover - geometry construction is deterministic
         raise RuntimeError(f"could not identify the strip's four edges: {edges}")
 
-    _tag_and_mesh(surface, edges, res, x_root=0.0, x_end=geom.length)
+    _tag_and_mesh(surface, edges, res, x_root=x0, x_end=x0 + geom.length)
 
 
 def _build_parameter_rectangle(xi_range, res: MeshResolution) -> None:

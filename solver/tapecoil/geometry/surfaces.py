@@ -140,11 +140,13 @@ class MappedSurface(Surface):
 
 @dataclass(frozen=True)
 class StripGeometry(Surface):
-    """A cylindrical strip: arc radius R [m] (inf: flat), arc width b [m], length L [m]."""
+    """A cylindrical strip: arc radius R [m] (inf: flat), arc width b [m], length L [m], from
+    ``start`` [m] along the tape (a piece of a longer tape, as a hybrid's shell window is)."""
 
     R: float
     width: float
     length: float
+    start: float = 0.0
 
     @classmethod
     def from_config(cls, config: Config) -> StripGeometry:
@@ -152,7 +154,7 @@ class StripGeometry(Surface):
 
     @property
     def xi_range(self):
-        return ((0.0, self.length), (-self.width / 2, self.width / 2))
+        return ((self.start, self.start + self.length), (-self.width / 2, self.width / 2))
 
     @property
     def flat(self) -> bool:

@@ -58,21 +58,30 @@ SECTION_FIELDS = 10
 SERIES_BELOW = 1e-4
 
 
-def create_beam_mesh(comm, centre_line: Callable[[np.ndarray], np.ndarray], length: float, elements: int):
-    """A mesh of ``elements`` quadratic intervals along the curve ``centre_line(s)`` -> (n, 3)
-    points [m], s the arc length from 0 to ``length`` [m] (the curve parametrised by arc length).
-    Built on rank 0 and distributed over ``comm``."""
-    if elements < 1:
-        raise ValueError(f"a beam mesh needs at least one element, got {elements}")
-    if not (math.isfinite(length) and length > 0):
-        raise ValueError(f"a beam's length must be positive, got {length!r}")
+def create_beam_mesh(comm, centre_line: Callable[[np.ndarray], np.ndarray], length, elements):
+    """A mesh of quadratic intervals along the curve ``centre_line(s)`` -> (n, 3) points [m], s
+    the arc length (the curve parametrised by arc length): ``elements`` of them from s = 0 to
+    ``length`` [m]; or, with ``length`` a sequence of spans (s_start, s_end) [m] and
+    ``elements`` one count for each, those spans alone, each a piece of its own (the beam on
+    both sides of a hybrid's shell window). Built on rank 0 and distributed over ``comm``."""
+    spans = [(0.0, length)] if np.ndim(length) == 0 else [tuple(span) for span in length]
+    counts = [elements] if np.ndim(elements) == 0 else list(elements)
+    if len(counts) != len(spans):
+        raise ValueError(f"a beam mesh needs one element count per span, got {counts} for {spans}")
+    for (start, end), count in zip(spans, counts, strict=True):
+        if count < 1:
+            raise ValueError(f"a beam mesh needs at least one element per span, got {count}")
+        if not (math.isfinite(start) and math.isfinite(end) and end > start):
+            raise ValueError(f"a beam's span must have a positive length, got ({start!r}, {end!r})")
     element = basix.ufl.element("Lagrange", "interval", 2, shape=(3,))
     if comm.rank == 0:
-        s = np.linspace(0.0, length, 2 * elements + 1)
-        x = np.asarray(centre_line(s), dtype=float).reshape(-1, 3)
-        cells = np.column_stack(
-            [2 * np.arange(elements), 2 * np.arange(elements) + 2, 2 * np.arange(elements) + 1]
-        )
+        points, cells, first = [], [], 0
+        for (start, end), count in zip(spans, counts, strict=True):
+            points.append(np.asarray(centre_line(np.linspace(start, end, 2 * count + 1)), dtype=float))
+            e = first + 2 * np.arange(count)
+            cells.append(np.column_stack([e, e + 2, e + 1]))
+            first += 2 * count + 1
+        x, cells = np.concatenate([p.reshape(-1, 3) for p in points]), np.concatenate(cells)
     else:
         x, cells = np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
     return compat.create_mesh(comm, cells.astype(np.int64), x, ufl.Mesh(element))
@@ -193,7 +202,9 @@ class GeometricallyExactBeam:
         c = self.section_fields
         C_N = ufl.as_matrix([[c[0], 0, 0], [0, c[1], 0], [0, 0, c[2]]])
         C_M = ufl.as_matrix([[c[3], 0, 0], [0, c[4], 0], [0, 0, c[5]]])
-        natural = ufl.as_vector([c[6], c[7], c[8]])
+        # the natural curvatures' share (1 but while a section is being flattened, see the hybrid)
+        self.natural_share = dolfinx.fem.Constant(mesh, 1.0)
+        natural = self.natural_share * ufl.as_vector([c[6], c[7], c[8]])
         bend = self.curvature - self.curvature_0 - natural
         self.energy_density = (
             0.5 * ufl.dot(self.strain, C_N * self.strain) + 0.5 * ufl.dot(bend, C_M * bend) + c[9]

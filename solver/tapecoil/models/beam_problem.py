@@ -26,7 +26,8 @@ __all__ = ["BeamProblem"]
 class BeamProblem:
     """A beam stated as a benchmark is: line, section, frame, supports, loads, load steps.
 
-    ``centre_line(s)`` and ``length``, ``elements``: the mesh (:func:`create_beam_mesh`);
+    ``centre_line(s)`` and ``length``, ``elements``: the mesh (:func:`create_beam_mesh`: a
+    length and a count, or spans and a count for each);
     ``section``, ``frame``: see :class:`GeometricallyExactBeam`. Loads are given per unit of a load
     parameter (or held constant), and :meth:`solve` steps the parameter; a clamp may turn with it
     as an angle. ``name``: the PETSc options prefix is ``name + "_"``.

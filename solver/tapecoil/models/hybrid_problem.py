@@ -4,7 +4,8 @@ where the section deforms, the beam where it keeps its shape.
 Each part is stated as its own benchmark is (a :class:`~tapecoil.models.problem.ShellProblem`
 and a :class:`~tapecoil.models.beam_problem.BeamProblem`: supports, loads, contact); the shell's
 edge ``xi1_max`` is tied to a beam node as a rigid section
-(:class:`~tapecoil.models.interface.RigidSectionTie`), and one Newton solve
+(:class:`~tapecoil.models.interface.RigidSectionTie`), or both its edges to the beam's pieces on
+either side of the window, and one Newton solve
 (:class:`~tapecoil.core.coupled_newton.CoupledSNESSolver`) steps the load parameter shared by
 both::
 
@@ -21,7 +22,7 @@ from __future__ import annotations
 import time
 
 from tapecoil.config import SolverConfig
-from tapecoil.core.coupled_newton import Block, CoupledSNESSolver, JointState
+from tapecoil.core.coupled_newton import Block, CoupledSNESSolver, CouplingGroup, JointState
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.stepping import Continuation, Relaxation, StepRecord
 from tapecoil.models.interface import RigidSectionTie
@@ -30,46 +31,120 @@ __all__ = ["HybridProblem"]
 
 
 class HybridProblem:
-    """The shell problem ``shell`` with its edge ``xi1_max`` tied to the node ``beam_end`` [m] of
-    the beam problem ``beam``, penalty factor ``penalty`` (:class:`RigidSectionTie`), the wall's
-    in-plane modulus ``modulus`` [Pa]. ``name``: the PETSc options prefix is ``name + "_"``."""
+    """The shell problem ``shell`` tied to the beam problem ``beam``: its edge ``xi1_max`` to the
+    beam's node ``beam_end`` [m], or, with ``ties``, each edge named to a node, as a section of
+    the shape given (``[(edge, node, section), ...]``, edge ``"xi1_min"`` or ``"xi1_max"``,
+    section ``"arc"`` or ``"flat"``: a window of shell between two pieces of beam), with penalty
+    factor ``penalty`` (:class:`RigidSectionTie`) and the wall's in-plane modulus ``modulus``
+    [Pa]. ``name``: the PETSc options prefix is ``name + "_"``."""
 
-    def __init__(self, shell, beam, beam_end, *, modulus: float, penalty: float = 1e3, name: str = "hybrid"):
+    def __init__(
+        self,
+        shell,
+        beam,
+        beam_end=None,
+        *,
+        ties=None,
+        modulus: float,
+        penalty: float = 1e3,
+        name: str = "hybrid",
+    ):
+        if (beam_end is None) == (ties is None):
+            raise ValueError("hybrid: give either beam_end or ties")
+        if ties is None:
+            ties = [("xi1_max", beam_end, "arc")]
         self.shell, self.beam, self.name = shell, beam, name
-        strip = shell.strip
         (x0, x1), _ = shell.surface.xi_range
-        # the edge's element length: the strip's last element along xi_1 (graded meshes differ)
-        element_length = strip.resolution.element_lengths(x1 - x0)[1]
-        self.tie_element = element_length
-        self.tie = RigidSectionTie(
-            shell.model,
-            shell.edge("xi1_max"),
-            beam.model,
-            beam_end,
-            element_length=element_length,
-            modulus=modulus,
-            penalty=penalty,
-        )
+        first, last = shell.strip.resolution.element_lengths(x1 - x0)
+        element_lengths = {"xi1_min": first, "xi1_max": last}
+        self.ties: dict[str, RigidSectionTie] = {}
+        for edge, node, section in ties:
+            if edge not in element_lengths or edge in self.ties:
+                raise ValueError(f"hybrid: a tie's edge must be xi1_min or xi1_max, once each; got {edge!r}")
+            self.ties[edge] = RigidSectionTie(
+                shell.model,
+                shell.edge(edge),
+                beam.model,
+                node,
+                element_length=element_lengths[edge],
+                modulus=modulus,
+                penalty=penalty,
+                section=section,
+            )
+        self.coupling = CouplingGroup([tie.coupling for tie in self.ties.values()])
+        self._flattening: list[RigidSectionTie] = []
+        self.tie_element = min(element_lengths[edge] for edge in self.ties)
         self.history: list[StepRecord] = []
         self.wall_time = 0.0
 
     def energy(self) -> float:
-        """The strain energy of shell and beam and the tie's [J] (collective)."""
+        """The strain energy of shell and beam and the ties' [J] (collective)."""
         comm = self.shell.strip.mesh.comm
-        self.tie.coupling.read()
+        self.coupling.read()
         return (
             global_scalar(self.shell.model.strain_energy, comm)
             + self.beam.model.strain_energy()
-            + global_scalar(self.tie.coupling.energy, comm)
+            + self.coupling.energy()
         )
+
+    def flatten(self, edge: str) -> None:
+        """Flatten the flat tie at ``edge`` with the load parameter: its section goes from the arc
+        at 0 to the flat strip at 1 (through the arcs of curvature (1 - f)/R), flat beyond; the
+        beam's natural curvatures (a flattened strip's) grow with it."""
+        tie = self.ties.get(edge)
+        if tie is None or tie.section != "flat":
+            raise ValueError(f"hybrid: flatten needs a flat tie at {edge!r}")
+        self._flattening.append(tie)
+        self._set_flatness(self.beam.committed_load)
+
+    def _set_flatness(self, value: float) -> None:
+        f = min(max(value, 0.0), 1.0)
+        for tie in self._flattening:
+            tie.flatness.value = f
+        self.beam.model.natural_share.value = f
 
     def _set_load(self, value: float) -> None:
         self.shell.set_load(value)
         self.beam._set_load(value)
+        if self._flattening:
+            self._set_flatness(value)
 
     def _commit(self) -> None:
-        self.tie.commit()  # reads the end's rotation increment before the beam sets it to zero
+        for tie in self.ties.values():
+            tie.commit()  # reads its end's rotation increment before the beam sets it to zero
         self.beam._commit()
+
+    def _solver(self, F_s, J_s, settings: SolverConfig, options: dict | None, held=((), ())):
+        """The joint Newton solver; ``held``: further Dirichlet conditions on the shell and the beam."""
+        F_b, J_b = self.beam.forms()
+        shell_held, beam_held = held
+        blocks = [
+            Block(
+                F_s,
+                J_s,
+                self.shell.model.q,
+                [*self.shell.bcs, *shell_held],
+                self.shell.point_forces,
+                self.shell.model.rounding_scale(),
+            ),
+            Block(
+                F_b,
+                J_b,
+                self.beam.model.q,
+                [*self.beam.bcs, *beam_held],
+                self.beam.point_forces,
+                self.beam.model.rounding_scale(),
+            ),
+        ]
+        return CoupledSNESSolver(
+            blocks,
+            self.coupling,
+            prefix=f"{self.name}_",
+            options={**settings.petsc_options, **(options or {})},
+            rtol=settings.rtol,
+            atol=settings.atol,
+            max_it=settings.max_newton,
+        )
 
     def solve(
         self,
@@ -106,34 +181,7 @@ class HybridProblem:
             F_s = F_s + viscous
             J_s = self.shell.model.jacobian_form(F_s)
             relax = Relaxation(coefficient, previous, scale=relaxation, state=self.shell.model.q)
-        F_b, J_b = self.beam.forms()
-        blocks = [
-            Block(
-                F_s,
-                J_s,
-                self.shell.model.q,
-                self.shell.bcs,
-                self.shell.point_forces,
-                self.shell.model.rounding_scale(),
-            ),
-            Block(
-                F_b,
-                J_b,
-                self.beam.model.q,
-                self.beam.bcs,
-                self.beam.point_forces,
-                self.beam.model.rounding_scale(),
-            ),
-        ]
-        solver = CoupledSNESSolver(
-            blocks,
-            self.tie.coupling,
-            prefix=f"{self.name}_",
-            options={**settings.petsc_options, **(options or {})},
-            rtol=settings.rtol,
-            atol=settings.atol,
-            max_it=settings.max_newton,
-        )
+        solver = self._solver(F_s, J_s, settings, options)
         smallest = 1e-6 * abs(span) if min_step is None else min_step
         control = settings.control(
             initial_step=first_step / abs(span),

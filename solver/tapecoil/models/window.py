@@ -1,24 +1,39 @@
-"""The hybrid's shell window grown into its beam, with the state carried over.
+"""The hybrid's shell window moved along the tape, with the state carried over.
 
 :func:`carry_over` sets the states of a new :class:`~tapecoil.models.hybrid_problem.HybridProblem`
-from an old one of the same tape whose shell window ends earlier, at an accepted step. The new
-hybrid is built by its caller with the same supports and loads (the thesis re-placed its shell
-strip by hand between stages with an "import analysis"; here the program does it):
+from an old one of the same tape whose shell window lies elsewhere along it, at an accepted
+step. The new hybrid is built by its caller with the same supports and loads (the thesis re-placed
+its shell strip by hand between stages with an "import analysis"; here the program does it).
+The beam's and the shell's nodes lie at the same points along the tape (the same element
+length), so every transfer is made node by node, without interpolation along the tape:
 
-- where the old hybrid had shell, the new shell takes the old one's nodal values;
-- where the old hybrid had beam and the new one has shell, each section of the new shell is
-  placed rigidly in the old beam's section frame at that point, as the tie places the edge:
-  phi = r + Q (X - X_c), d = Q n0, Q the node's frame relative to its reference. The beam's and
-  the shell's nodes lie at the same points along the tape (the same element length), so this
-  is exact at every node, without interpolation;
-- where both have beam, the new beam takes the old one's nodal values and its frames and
-  curvatures at the quadrature points;
-- the tie takes the rotation of the new end's section.
+- where the old hybrid had shell and the new one has shell, the new shell takes the old one's
+  nodal values;
+- where the old hybrid had beam and the new one has shell (the window grown into the beam),
+  each section of the new shell is placed rigidly in the old beam's section frame at that point,
+  with the shape of that beam's section (the arc, or the flattened strip), as a tie places its
+  edge: phi = r + Q o, d = Q n, o and n the section's offsets and normals in the beam's
+  reference frame, Q the node's frame relative to its reference;
+- where the old hybrid had shell and the new one has beam (the window withdrawn from behind the
+  ploy region), each node of the new beam takes the rigid motion that fits the old shell's
+  section there best, in the shape of the new beam's section: r and Q minimising the sum over
+  the section's nodes, weighted by their share of the width, of |p - r - Q o|^2 + l^2 |d - Q n|^2
+  for Q (l a quarter of the width; the directors fix the turn about a flat section's line), and
+  of |p - r - Q o|^2 for r. Its frames
+  at the quadrature points are fitted the same way to the section there, the shell's nodes
+  interpolated along the tape by its own quadratic shape functions, and their curvature,
+  axial(Lambda^T Lambda'), is taken by a central difference of those fits;
+- where both have beam, the new beam takes the old one's nodes, frames and curvatures;
+- each tie takes the rotation of its end's section; a tie that the old hybrid had at the same
+  node keeps its shape (and so the gaps through which it carries load), a new one takes its
+  edge's shape as it is (:meth:`~tapecoil.models.interface.RigidSectionTie.keep_shape`), so that
+  no penalty energy is stored by the carry-over itself. A new tie then carries no load until
+  its gaps open, in the next solve.
 
-A section carried from beam to shell keeps its shape, so the transfer conserves the
-configuration exactly and the energy where the beam is unstrained (the straight part of a tape
-ahead of its ploy region, which carries no moment when its end is free). Where the beam is bent,
-the shell's section then finds its own shape in the next solve.
+A section carried between beam and shell keeps its place and its turn. The shell's section
+deformation beyond the beam's shape is dropped where shell becomes beam, and the shell's own
+interpolation error of a turned arc is added where beam becomes shell: the energy is conserved
+where the section has the beam's shape (docs/hybrid.md gives the measured figures).
 """
 
 from __future__ import annotations
@@ -27,9 +42,13 @@ import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
+from tapecoil.models.interface import section_shape
 from tapecoil.models.nodes import Nodes
 
 __all__ = ["carry_over"]
+
+# the curvature of a fitted frame field by a central difference over this share of an element
+DIFFERENCE_STEP = 1e-3
 
 
 def _gathered(comm, *arrays) -> list[np.ndarray]:
@@ -45,12 +64,139 @@ def _match(tree: cKDTree, points: np.ndarray, scale: float, what: str, comm) -> 
     return index
 
 
-def carry_over(old, new) -> None:
-    """Set ``new``'s shell, beam and tie from ``old``'s (see the module; collective).
+def window_of(hybrid) -> tuple[float, float]:
+    """The shell window's ends along the tape [m]."""
+    return hybrid.shell.surface.xi_range[0]
 
-    Both hybrids are of the same tape along x, with the shell from the root and the beam beyond,
-    the same element length and the same shell elements across; ``new``'s window is at least as
-    long as ``old``'s. ``old`` must be at an accepted step (its rotation increments zero).
+
+def _shape_of(hybrid, x: np.ndarray) -> np.ndarray:
+    """For points ``x`` along the tape in ``hybrid``'s beam: True where its section is flat (the
+    shape of the tie on that side of the window)."""
+    start, end = window_of(hybrid)
+    flat = np.zeros(len(x), dtype=bool)
+    for edge, side in (("xi1_min", x <= start), ("xi1_max", x >= end)):
+        tie = hybrid.ties.get(edge)
+        if tie is not None and tie.section == "flat":
+            flat |= side
+    return flat
+
+
+def _section_shape(geometry, xi: np.ndarray, centre: np.ndarray, flat: bool):
+    """The section's offsets from the beam's line (n, 3) [m] and its normals (n, 3), in the
+    beam's reference frame, at parameter points ``xi`` (2, n) whose beam nodes are at
+    ``centre`` ((3,) or (n, 3) [m]): the arc as it is, or the strip laid flat (as the tie has them)."""
+    centre = np.asarray(centre, dtype=float)
+    ends = centre.T if centre.ndim == 2 else centre
+    offsets, normals = section_shape(geometry.R, xi, ends, 1.0 if flat else 0.0)
+    return offsets.T, normals.T
+
+
+def _fit(points, directors, offsets, normals, weights, arm):
+    """The rigid motion (r, Q) that fits p = r + Q o, d = Q n best (weighted least squares with
+    the directors at lever ``arm`` [m]; Kabsch's construction)."""
+    source = np.concatenate([offsets, offsets + arm * normals])
+    target = np.concatenate([points, points + arm * directors])
+    w = np.concatenate([weights, weights])
+    source_mean, target_mean = w @ source / w.sum(), w @ target / w.sum()
+    H = ((source - source_mean) * w[:, None]).T @ (target - target_mean)
+    U, _, Vt = np.linalg.svd(H)
+    sign = np.sign(np.linalg.det(Vt.T @ U.T))
+    Q = Vt.T @ np.diag([1.0, 1.0, sign]) @ U.T
+    # the line's place from the positions alone: a director off Q n (the shell's transverse
+    # shear) would otherwise move it by the lever, and strain the beam along its line
+    return weights @ (points - offsets @ Q.T) / weights.sum(), Q
+
+
+class _ShellSections:
+    """An old shell's nodes gathered on every rank, section by section along the tape: positions,
+    directors and parameter points, interpolated along the tape by the shell's quadratic shape
+    functions."""
+
+    def __init__(self, shell, comm):
+        nodes = Nodes(shell)
+        q = shell.q.x.array
+        xi, points, directors = _gathered(comm, nodes.xi.T, nodes.positions(q).T, nodes.directors(q).T)
+        self.geometry = shell.strip.geometry
+        scale = 1e-8 * (1.0 + np.abs(xi).max())  # far below a node spacing
+        # sections by x rounded (a mesh generator's coordinates of one section differ in the last
+        # digits), across by xi_2; a node on several ranks (shared) appears once per rank: one kept
+        key = np.round(xi / scale).astype(np.int64)
+        key, first = np.unique(key, axis=0, return_index=True)  # sorted by x, then xi_2
+        xi, points, directors = xi[first], points[first], directors[first]
+        starts = np.flatnonzero(np.concatenate([[True], np.diff(key[:, 0]) > 1]))
+        across = len(xi) // len(starts)
+        if across * len(starts) != len(xi) or (len(starts) - 1) % 2:
+            raise ValueError("carry over: the shell's nodes do not form whole sections of quadratic elements")
+        self.x = xi[starts, 0]
+        self.xi2 = xi[:across, 1]
+        self.points = points.reshape(len(starts), across, 3)
+        self.directors = directors.reshape(len(starts), across, 3)
+        # each node's share of the width: the quadratic elements' Simpson weights
+        self.weights = np.zeros(across)
+        for k in range(0, across - 1, 2):
+            width = self.xi2[k + 2] - self.xi2[k]
+            self.weights[k : k + 3] += width * np.array([1.0, 4.0, 1.0]) / 6
+        self.arm = 0.25 * (self.xi2[-1] - self.xi2[0])
+
+    def contains(self, x: np.ndarray) -> np.ndarray:
+        """True for points ``x`` [m] strictly inside the shell."""
+        margin = 1e-9 * (1.0 + np.abs(self.x).max())
+        return (x > self.x[0] + margin) & (x < self.x[-1] - margin)
+
+    def section_at(self, x: float):
+        """Positions and directors (across, 3) and parameter points (2, across) at ``x`` [m]."""
+        k = min(max(int(np.searchsorted(self.x, x) - 1) // 2 * 2, 0), len(self.x) - 3)
+        x0, x1, x2 = self.x[k : k + 3]
+        shape = np.array(
+            [
+                (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2)),
+                (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2)),
+                (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)),
+            ]
+        )
+        points = np.einsum("k,kjc->jc", shape, self.points[k : k + 3])
+        directors = np.einsum("k,kjc->jc", shape, self.directors[k : k + 3])
+        directors /= np.linalg.norm(directors, axis=1)[:, None]
+        return points, directors, np.vstack([np.full(len(self.xi2), x), self.xi2])
+
+    def fit(self, x: float, centre: np.ndarray, flat: bool):
+        """The rigid motion (r [m], Q) of the section at ``x`` about the beam node ``centre``."""
+        points, directors, xi = self.section_at(x)
+        offsets, normals = _section_shape(self.geometry, xi, centre, flat)
+        return _fit(points, directors, offsets, normals, self.weights, self.arm)
+
+
+def _frames_from_shell(sections, points, references, flat_of) -> tuple[np.ndarray, np.ndarray]:
+    """Frames (n, 9) and curvatures (n, 3) at quadrature points ``points`` (n, 3) [m] of the new
+    beam, whose reference frames there are ``references`` (n, 9), fitted to the old shell's
+    sections (see the module)."""
+    step = DIFFERENCE_STEP * np.min(np.diff(sections.x))
+    frames, curvatures = [], []
+    flat = flat_of(points[:, 0])
+    for p, reference, is_flat in zip(points, references.reshape(-1, 3, 3), flat, strict=True):
+        fitted = []
+        for dx in (-step, 0.0, step):
+            centre = p + np.array([dx, 0.0, 0.0])
+            _, Q = sections.fit(centre[0], centre, is_flat)
+            fitted.append(Q @ reference)
+        F = fitted[1]
+        dF = (fitted[2] - fitted[0]) / (2 * step)
+        S = F.T @ dF
+        frames.append(F.reshape(9))
+        curvatures.append([(S[2, 1] - S[1, 2]) / 2, (S[0, 2] - S[2, 0]) / 2, (S[1, 0] - S[0, 1]) / 2])
+    return np.array(frames).reshape(-1, 9), np.array(curvatures).reshape(-1, 3)
+
+
+def carry_over(old, new) -> None:
+    """Set ``new``'s shell, beam and ties from ``old``'s (see the module; collective).
+
+    Both hybrids are of the same tape along x, with the same element length and the same shell
+    elements across; each tie's end a beam node. ``old`` must be at an accepted step (its
+    rotation increments zero). Where the two windows overlap the states are the old shell's;
+    the new window may lie anywhere along the tape.
+
+    The beam's reference frames along a straight tape: the fits take the beam's reference frame
+    at a point to be its frame at the nearest node (the tape's frame is the same along it).
     """
     comm = old.shell.strip.mesh.comm
     beam, shell = old.beam.model, old.shell.model
@@ -60,24 +206,17 @@ def carry_over(old, new) -> None:
             "carry over: the old hybrid is not at an accepted step (its beam's rotation increments "
             "are not zero)"
         )
-    old_window = old.shell.surface.xi_range[0][1]
-    new_window = new.shell.surface.xi_range[0][1]
-    if new_window < old_window:
-        raise ValueError(
-            f"carry over: the new window ({new_window} m) is shorter than the old ({old_window} m)"
-        )
     scale = 1.0 + new.beam.mesh.comm.allreduce(
         float(np.abs(new.beam.model.node_points).max(initial=0.0)), op=MPI.MAX
     )
+    tolerance = 1e-9 * scale
 
     # the old states, every rank's, node by node
+    sections = _ShellSections(shell, comm)
     old_nodes = Nodes(shell)
     q_shell = shell.q.x.array
     shell_xi, shell_u, shell_theta = _gathered(
-        comm,
-        old_nodes.space.tabulate_dof_coordinates()[:, :2],
-        q_shell[old_nodes.u_dofs],
-        q_shell[old_nodes.theta_dofs],
+        comm, old_nodes.xi.T, q_shell[old_nodes.u_dofs], q_shell[old_nodes.theta_dofs]
     )
     q_beam = beam.q.x.array
     beam_points, beam_u, beam_frames, beam_reference = _gathered(
@@ -85,55 +224,94 @@ def carry_over(old, new) -> None:
     )
     beam_tree = cKDTree(beam_points)
     rotations = beam_frames @ np.transpose(beam_reference, (0, 2, 1))  # Q = Lambda Lambda_0^T
+    old_start, old_end = window_of(old)
 
-    # the new shell: old shell nodes, then sections placed by the old beam
+    # the new shell: the old shell's nodes, then sections placed by the old beam
     new_model = new.shell.model
     nodes = Nodes(new_model)
-    xi = nodes.space.tabulate_dof_coordinates()[:, :2]
+    xi = nodes.xi.T
     q = new_model.q.x.array
-    from_shell = xi[:, 0] <= old_window + 1e-9 * scale
+    from_shell = (xi[:, 0] >= old_start - tolerance) & (xi[:, 0] <= old_end + tolerance)
     index = _match(cKDTree(shell_xi), xi[from_shell], scale, "the new shell's nodes", comm)
     q[nodes.u_dofs[from_shell]] = shell_u[index]
     q[nodes.theta_dofs[from_shell]] = shell_theta[index]
-    ahead = ~from_shell
-    if comm.allreduce(int(ahead.sum())) > 0:
-        # the branch of the unbounded angle: the old shell's at its tied edge
-        edge = np.isclose(shell_xi[:, 0], old_window, rtol=0, atol=1e-9 * scale)
-        rotation_near = float(np.mean(shell_theta[edge, 1]))
+    placed = ~from_shell
+    if comm.allreduce(int(placed.sum())) > 0:
+        centre_line = beam_points[0, 1:]  # the beam's line across the tape (y, z), the same all along
         geometry = new.shell.strip.geometry
-        X = geometry.phi0(xi[ahead].T) if ahead.any() else np.zeros((3, 0))
-        centroid = np.asarray(new.tie.end, dtype=float)[1:]
-        sections = np.column_stack([xi[ahead, 0], np.tile(centroid, (int(ahead.sum()), 1))])
-        k = _match(beam_tree, sections, scale, "the new shell's sections", comm)
-        if ahead.any():  # a rank may hold none of them
-            Q = rotations[k]
-            offset = X.T - sections
-            position = sections + beam_u[k] + np.einsum("nij,nj->ni", Q, offset)
-            q[nodes.u_dofs[ahead]] = position - X.T
-            normals = geometry.frame(xi[ahead].T)[2]  # (3, n)
-            director = np.einsum("nij,jn->in", Q, normals)
-            angles = new_model.angles_of(director, xi[ahead].T, rotation_near=rotation_near)
-            q[nodes.theta_dofs[ahead]] = angles.T
+        flat = _shape_of(old, xi[placed, 0])
+        centres = np.column_stack([xi[placed, 0], np.tile(centre_line, (int(placed.sum()), 1))])
+        k = _match(beam_tree, centres, scale, "the new shell's sections", comm)
+        for near, side in ((old_start, xi[placed, 0] < old_start), (old_end, xi[placed, 0] > old_end)):
+            # the unbounded angle's branch: the old shell's at its edge on that side
+            edge = np.isclose(shell_xi[:, 0], near, rtol=0, atol=tolerance)
+            rotation_near = float(np.mean(shell_theta[edge, 1]))
+            for is_flat in (False, True):
+                pick = side & (flat == is_flat)
+                if not pick.any():
+                    continue
+                where = np.flatnonzero(placed)[pick]
+                offsets, normals = _section_shape(geometry, xi[where].T, centres[pick], is_flat)
+                Q = rotations[k[pick]]
+                position = centres[pick] + beam_u[k[pick]] + np.einsum("nij,nj->ni", Q, offsets)
+                q[nodes.u_dofs[where]] = position - geometry.phi0(xi[where].T).T
+                director = np.einsum("nij,nj->in", Q, normals)
+                angles = new_model.angles_of(director, xi[where].T, rotation_near=rotation_near)
+                q[nodes.theta_dofs[where]] = angles.T
     new_model.q.x.scatter_forward()
 
-    # the new beam: nodes, then frames and curvatures at the quadrature points
+    # the new beam's nodes: the old beam's, then fitted to the old shell's sections
     target = new.beam.model
-    k = _match(beam_tree, target.node_points, scale, "the new beam's nodes", comm)
-    target.q.x.array[target.node_u_dofs] = beam_u[k]
+    inside = sections.contains(target.node_points[:, 0])
     target.q.x.array[target.node_theta_dofs] = 0.0
-    target.node_frames = beam_frames[k].copy()
+    frames = target.node_reference_frames.copy()
+    outside = ~inside
+    k = _match(beam_tree, target.node_points[outside], scale, "the new beam's nodes", comm)
+    target.q.x.array[target.node_u_dofs[outside]] = beam_u[k]
+    frames[outside] = beam_frames[k]
+    flat_new = _shape_of(new, target.node_points[:, 0])
+    for i in np.flatnonzero(inside):
+        centre = target.node_points[i]
+        r, Q = sections.fit(centre[0], centre, flat_new[i])
+        target.q.x.array[target.node_u_dofs[i]] = r - centre
+        frames[i] = Q @ target.node_reference_frames[i]
+    target.node_frames = frames
     target.q.x.scatter_forward()
-    points, frames, curvatures = _gathered(
+
+    # the new beam's quadrature points: the old beam's, then fitted
+    points, old_frames, old_curvatures = _gathered(
         comm, *(beam.quadrature_values(name) for name in ("points", "frame_n", "curvature_n"))
     )
     new_points = target.quadrature_values("points")
-    k = _match(cKDTree(points), new_points, scale, "the new beam's quadrature points", comm)
-    target.set_quadrature_values(frames[k], curvatures[k])
+    new_frames = target.quadrature_values("frame_n")
+    new_curvatures = target.quadrature_values("curvature_n")
+    inside = sections.contains(new_points[:, 0])
+    k = _match(cKDTree(points), new_points[~inside], scale, "the new beam's quadrature points", comm)
+    new_frames[~inside], new_curvatures[~inside] = old_frames[k], old_curvatures[k]
+    if inside.any():  # the new beam's frames are still its reference frames
+        new_frames[inside], new_curvatures[inside] = _frames_from_shell(
+            sections, new_points[inside], new_frames[inside], lambda x: _shape_of(new, x)
+        )
+    target.set_quadrature_values(new_frames, new_curvatures)
 
-    # the tie: the new end's section rotation
-    end = _match(beam_tree, np.asarray(new.tie.end, dtype=float)[None, :], scale, "the new tie's end", comm)[
-        0
-    ]
-    new.tie.turned.value[:] = rotations[end]
+    # the ties: their ends' section rotations
+    for tie in new.ties.values():
+        end = np.asarray(tie.end, dtype=float)
+        if sections.contains(end[:1])[0]:
+            _, Q = sections.fit(end[0], end, tie.section == "flat")
+        else:
+            Q = rotations[_match(beam_tree, end[None, :], scale, "a new tie's end", comm)[0]]
+        tie.turned.value[:] = Q
     new.beam.committed_load = old.beam.committed_load
     new._set_load(old.beam.committed_load)
+    for edge, tie in new.ties.items():
+        kept = old.ties.get(edge)
+        if (
+            kept is not None
+            and np.allclose(kept.end, tie.end, rtol=0, atol=tolerance)
+            and kept.section == tie.section
+        ):
+            # the same tie as before: its kept shape, with the gaps through which it carries load
+            tie.copy_shape(kept)
+        else:
+            tie.keep_shape()

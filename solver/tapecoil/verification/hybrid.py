@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 import time
 
+import dolfinx
 import numpy as np
 from mpi4py import MPI
 
@@ -69,14 +70,18 @@ def tape_hybrid(
     length: float,
     window: float,
     *,
+    start: float = 0.0,
+    flat_root: bool = False,
     penalty=PENALTY,
     comm=MPI.COMM_WORLD,
     name="verify_hybrid",
 ):
     """The tape of ``config`` (an isotropic wall), ``length`` [m] long, as a hybrid: a shell of
-    ``window`` [m] from the root, ``across`` elements across and ``element`` [m] long, tied to a
-    beam of the arc section on the rest, its elements as long. No supports or loads yet.
-    Returns (hybrid, the beam's tip [m])."""
+    ``window`` [m] from ``start`` [m], ``across`` elements across and ``element`` [m] long, tied
+    to a beam of the arc section on the rest (on both sides when ``start`` > 0), its elements as
+    long; with ``flat_root``, the beam before the window is of the flattened strip's section
+    and tied flat (:meth:`HybridProblem.flatten` flattens it by steps). No supports or loads yet.
+    Returns (hybrid, the tape's tip [m], a beam node unless the window reaches it)."""
     from tapecoil.models.problem import ShellProblem
 
     if config.laminate.kind != "isotropic":
@@ -86,24 +91,37 @@ def tape_hybrid(
     tp = config.tape
     centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
     shell = ShellProblem(
-        StripGeometry(tp.R, tp.b, window),
+        StripGeometry(tp.R, tp.b, window, start=start),
         MeshResolution(across, max(1, round(window / element))),
         ShellMaterial(tp.E, tp.nu, tp.h),
         comm=comm,
         director_frame="global",
         name=f"{name}_shell",
     )
-    rest = length - window
+    end = start + window
+    to_the_end = end >= length - 1e-9 * length
+    spans = ([(0.0, start)] if start > 0 else []) + ([] if to_the_end else [(end, length)])
+    if not spans:
+        raise ValueError("tape_hybrid: the window covers the whole tape; that is the full shell")
     beam = BeamProblem(
-        lambda s: np.column_stack([window + s, 0 * s, 0 * s + centroid]),
-        rest,
-        max(1, round(rest / element)),
+        lambda s: np.column_stack([s, 0 * s, 0 * s + centroid]),
+        spans,
+        [max(1, round((b - a) / element)) for a, b in spans],
         BeamSection.circular_arc(tp.R, tp.alpha, tp.h, tp.E, tp.nu),
         _section_frame,
         comm=comm,
         name=f"{name}_beam",
     )
-    hybrid = HybridProblem(shell, beam, (window, 0.0, centroid), modulus=tp.E, penalty=penalty, name=name)
+    ties = [] if to_the_end else [("xi1_max", (end, 0.0, centroid), "arc")]
+    if start > 0:
+        ties.insert(0, ("xi1_min", (start, 0.0, centroid), "flat" if flat_root else "arc"))
+        if flat_root:
+            D = tp.E * tp.h**3 / (12 * (1 - tp.nu**2))
+            flat = BeamSection.flattened_strip(D, tp.nu * D, D, tp.R, tp.b, tp.h, tp.E, tp.nu)
+            owned = np.arange(beam.mesh.topology.index_map(1).size_local, dtype=np.int32)
+            middle = dolfinx.mesh.compute_midpoints(beam.mesh, 1, owned)[:, 0]
+            beam.model.set_section(owned[middle < start], flat)
+    hybrid = HybridProblem(shell, beam, ties=ties, modulus=tp.E, penalty=penalty, name=name)
     return hybrid, (length, 0.0, centroid)
 
 
@@ -161,7 +179,7 @@ def hybrid_cantilever(config: Config, resolution: MeshResolution, comm=MPI.COMM_
     hybrid_tip, hybrid, hybrid_wall = cantilever_tip_deflection(
         config, resolution, WINDOW, force, PENALTY, comm
     )
-    gaps = hybrid.tie.gaps()
+    gaps = hybrid.ties["xi1_max"].gaps()
     stiffer, _, _ = cantilever_tip_deflection(config, resolution, WINDOW, force, 10 * PENALTY, comm)
     shell_tip, full, shell_wall = cantilever_tip_deflection(
         config, resolution, L - element, force, PENALTY, comm
@@ -279,7 +297,7 @@ def hybrid_fold(
             "fold_x_range": shape["x_range"],
             "fold_energy_density_over_mu": shape["energy_density"]
             / theory.energy_density(fold_reference, tp.R, bending),
-            "tie_gap_rms": dict(zip(("position", "director"), hybrid.tie.gaps(), strict=True)),
+            "tie_gap_rms": dict(zip(("position", "director"), hybrid.ties["xi1_max"].gaps(), strict=True)),
             "wall_time": {"hybrid": hybrid.wall_time, "full_shell": full.info["wall_time"]},
             "full_shell_snap_angle": full.info["snap_angle"],
             "path": [[float(a), float(m)] for a, m in zip(phi, moment, strict=True)],
