@@ -114,27 +114,11 @@ class HybridProblem:
             tie.commit()  # reads its end's rotation increment before the beam sets it to zero
         self.beam._commit()
 
-    def _solver(self, F_s, J_s, settings: SolverConfig, options: dict | None, held=((), ())):
-        """The joint Newton solver; ``held``: further Dirichlet conditions on the shell and the beam."""
-        F_b, J_b = self.beam.forms()
-        shell_held, beam_held = held
+    def _solver(self, F_s, J_s, settings: SolverConfig, options: dict | None) -> CoupledSNESSolver:
+        """The joint Newton solver of the shell's forms ``F_s``, ``J_s`` and the beam's."""
         blocks = [
-            Block(
-                F_s,
-                J_s,
-                self.shell.model.q,
-                [*self.shell.bcs, *shell_held],
-                self.shell.point_forces,
-                self.shell.model.rounding_scale(),
-            ),
-            Block(
-                F_b,
-                J_b,
-                self.beam.model.q,
-                [*self.beam.bcs, *beam_held],
-                self.beam.point_forces,
-                self.beam.model.rounding_scale(),
-            ),
+            Block(F, J, part.model.q, part.bcs, part.point_forces, part.model.rounding_scale())
+            for part, (F, J) in ((self.shell, (F_s, J_s)), (self.beam, self.beam.forms()))
         ]
         return CoupledSNESSolver(
             blocks,
