@@ -195,8 +195,9 @@ def carry_over(old, new) -> None:
     rotation increments zero). Where the two windows overlap the states are the old shell's;
     the new window may lie anywhere along the tape.
 
-    The beam's reference frames along a straight tape: the fits take the beam's reference frame
-    at a point to be its frame at the nearest node (the tape's frame is the same along it).
+    The tape is straight in its reference (as the hybrids' tapes are): the central differences
+    of the fitted frames take the reference frame at a quadrature point for the points a small
+    step either side of it.
     """
     comm = old.shell.strip.mesh.comm
     beam, shell = old.beam.model, old.shell.model
