@@ -48,6 +48,5 @@ solver.destroy()
 print(f"penalty factor {penalty:g}, pull {pull:g} N: residual {residual:.3g}, {len(free)} unknowns")
 print("lowest eigenvalues", ", ".join(f"{v:.3g}" for v in eigenvalues[:4]), f"highest {eigenvalues[-1]:.3g}")
 print(f"condition number {eigenvalues[-1] / eigenvalues[0]:.3g}")
-print(
-    f"scaled by the diagonal: {scaled[0]:.3g} to {scaled[-1]:.3g}, condition number {scaled[-1] / scaled[0]:.3g}"
-)
+ratio = scaled[-1] / scaled[0]
+print(f"scaled by the diagonal: {scaled[0]:.3g} to {scaled[-1]:.3g}, condition number {ratio:.3g}")
