@@ -224,7 +224,10 @@ def test_a_window_moved_along_a_loaded_cantilever_reaches_the_uninterrupted_run(
 @pytest.mark.mpi
 def test_two_ranks_solve_the_hybrid_as_one():
     """The hybrid cantilever on all ranks and on each alone: the tip deflection to 1e-9, and a
-    carried-over state's tip and energies."""
+    carried-over state's tip and energies; a flattened end's energies before and after its
+    window moves."""
+    from tapecoil.models.window import carry_over
+
     assert MPI.COMM_WORLD.size > 1
     parallel, _, _ = cantilever_tip_deflection(Config(), coarse(), comm=MPI.COMM_WORLD)
     serial, _, _ = cantilever_tip_deflection(Config(), coarse(), comm=MPI.COMM_SELF)
@@ -241,6 +244,15 @@ def test_two_ranks_solve_the_hybrid_as_one():
     assert energies_parallel == pytest.approx(energies_serial, rel=1e-9)
     gap = moved_parallel.beam.position(tip) - moved_serial.beam.position(tip)
     assert np.linalg.norm(gap) / CANTILEVER_LENGTH < 1e-9
+    # a flattened end's window moved ahead: the flat tie's shape copied from every rank's nodes
+    energies = []
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        old, _ = flattened_end(0.05, 0.2, "flat_mpi_old", comm=comm)
+        old.solve(1.0, first_step=0.1, max_step=0.25)
+        moved, _ = flattened_end(0.05, 0.225, "flat_mpi_moved", comm=comm)
+        carry_over(old, moved)
+        energies.append((old.energy(), moved.energy()))
+    assert energies[0] == pytest.approx(energies[1], rel=1e-8)
 
 
 # the ties' penalty factor on a flattened end: with 1e3 the joint Newton cannot hold the

@@ -117,13 +117,19 @@ class _ShellSections:
         q = shell.q.x.array
         xi, points, directors = _gathered(comm, nodes.xi.T, nodes.positions(q).T, nodes.directors(q).T)
         self.geometry = shell.strip.geometry
-        scale = 1e-8 * (1.0 + np.abs(xi).max())  # far below a node spacing
-        # sections by x rounded (a mesh generator's coordinates of one section differ in the last
-        # digits), across by xi_2; a node on several ranks (shared) appears once per rank: one kept
-        key = np.round(xi / scale).astype(np.int64)
-        key, first = np.unique(key, axis=0, return_index=True)  # sorted by x, then xi_2
-        xi, points, directors = xi[first], points[first], directors[first]
-        starts = np.flatnonzero(np.concatenate([[True], np.diff(key[:, 0]) > 1]))
+        tolerance = 1e-9 * (1.0 + np.abs(xi).max())  # far below a node spacing
+        # sections: the nodes clustered by x (a mesh generator's coordinates of one section
+        # differ in the last digits), then ordered across by xi_2; a node on several ranks
+        # (shared) appears once per rank: one of them kept
+        order = np.argsort(xi[:, 0], kind="stable")
+        section = np.concatenate([[0], np.cumsum(np.diff(xi[order, 0]) > tolerance)])
+        section_of = np.empty(len(xi), dtype=np.int64)
+        section_of[order] = section
+        order = np.lexsort((xi[:, 1], section_of))
+        xi, points, directors, section_of = xi[order], points[order], directors[order], section_of[order]
+        keep = np.concatenate([[True], (np.diff(section_of) > 0) | (np.abs(np.diff(xi[:, 1])) > tolerance)])
+        xi, points, directors, section_of = xi[keep], points[keep], directors[keep], section_of[keep]
+        starts = np.flatnonzero(np.concatenate([[True], np.diff(section_of) > 0]))
         across = len(xi) // len(starts)
         if across * len(starts) != len(xi) or (len(starts) - 1) % 2:
             raise ValueError("carry over: the shell's nodes do not form whole sections of quadratic elements")
