@@ -38,6 +38,8 @@ where the section has the beam's shape (docs/hybrid.md gives the measured figure
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
@@ -45,7 +47,7 @@ from scipy.spatial import cKDTree
 from tapecoil.models.interface import section_shape
 from tapecoil.models.nodes import Nodes
 
-__all__ = ["carry_over"]
+__all__ = ["carry_over", "full_shell"]
 
 # the curvature of a fitted frame field by a central difference over this share of an element
 DIFFERENCE_STEP = 1e-3
@@ -144,9 +146,9 @@ class _ShellSections:
             self.weights[k : k + 3] += width * np.array([1.0, 4.0, 1.0]) / 6
         self.arm = 0.25 * (self.xi2[-1] - self.xi2[0])
 
-    def contains(self, x: np.ndarray) -> np.ndarray:
-        """True for points ``x`` [m] strictly inside the shell."""
-        margin = 1e-9 * (1.0 + np.abs(self.x).max())
+    def contains(self, x: np.ndarray, ends: bool = False) -> np.ndarray:
+        """True for points ``x`` [m] inside the shell (its ends included with ``ends``)."""
+        margin = (-1.0 if ends else 1.0) * 1e-9 * (1.0 + np.abs(self.x).max())
         return (x > self.x[0] + margin) & (x < self.x[-1] - margin)
 
     def section_at(self, x: float):
@@ -193,26 +195,38 @@ def _frames_from_shell(sections, points, references, flat_of) -> tuple[np.ndarra
     return np.array(frames).reshape(-1, 9), np.array(curvatures).reshape(-1, 3)
 
 
+def full_shell(model) -> SimpleNamespace:
+    """A full shell's state (a :class:`~tapecoil.models.shell.NaghdiShell` on a strip along the
+    whole tape, a coiled tape's, say) as the old side of :func:`carry_over`: shell everywhere,
+    no beam, no ties."""
+    strip = model.strip
+    return SimpleNamespace(
+        shell=SimpleNamespace(model=model, strip=strip, surface=strip.geometry), beam=None, ties={}
+    )
+
+
 def carry_over(old, new) -> None:
     """Set ``new``'s shell, beam and ties from ``old``'s (see the module; collective).
 
     Both hybrids are of the same tape along x, with the same element length and the same shell
     elements across; each tie's end a beam node. ``old`` must be at an accepted step (its
-    rotation increments zero). Where the two windows overlap the states are the old shell's;
-    the new window may lie anywhere along the tape.
+    rotation increments zero); it may be a full shell (:func:`full_shell`), whose state the new
+    hybrid's beam then takes by fits wherever it lies. Where the two windows overlap the states
+    are the old shell's; the new window may lie anywhere along the tape.
 
     The tape is straight in its reference (as the hybrids' tapes are): the central differences
     of the fitted frames take the reference frame at a quadrature point for the points a small
     step either side of it.
     """
     comm = old.shell.strip.mesh.comm
-    beam, shell = old.beam.model, old.shell.model
-    theta = beam.q.x.array[beam.node_theta_dofs]
-    if comm.allreduce(float(np.abs(theta).max(initial=0.0)), op=MPI.MAX) > 0.0:
-        raise ValueError(
-            "carry over: the old hybrid is not at an accepted step (its beam's rotation increments "
-            "are not zero)"
-        )
+    beam, shell = old.beam.model if old.beam is not None else None, old.shell.model
+    if beam is not None:
+        theta = beam.q.x.array[beam.node_theta_dofs]
+        if comm.allreduce(float(np.abs(theta).max(initial=0.0)), op=MPI.MAX) > 0.0:
+            raise ValueError(
+                "carry over: the old hybrid is not at an accepted step (its beam's rotation "
+                "increments are not zero)"
+            )
     scale = 1.0 + new.beam.mesh.comm.allreduce(
         float(np.abs(new.beam.model.node_points).max(initial=0.0)), op=MPI.MAX
     )
@@ -225,13 +239,23 @@ def carry_over(old, new) -> None:
     shell_xi, shell_u, shell_theta = _gathered(
         comm, old_nodes.xi.T, q_shell[old_nodes.u_dofs], q_shell[old_nodes.theta_dofs]
     )
-    q_beam = beam.q.x.array
-    beam_points, beam_u, beam_frames, beam_reference = _gathered(
-        comm, beam.node_points, q_beam[beam.node_u_dofs], beam.node_frames, beam.node_reference_frames
-    )
+    if beam is not None:
+        q_beam = beam.q.x.array
+        beam_points, beam_u, beam_frames, beam_reference = _gathered(
+            comm, beam.node_points, q_beam[beam.node_u_dofs], beam.node_frames, beam.node_reference_frames
+        )
+        points, old_frames, old_curvatures = _gathered(
+            comm, *(beam.quadrature_values(name) for name in ("points", "frame_n", "curvature_n"))
+        )
+    else:
+        beam_points, beam_u, points, old_frames, old_curvatures = (np.zeros((0, n)) for n in (3, 3, 3, 9, 3))
+        beam_frames = beam_reference = np.zeros((0, 3, 3))
     beam_tree = cKDTree(beam_points)
     rotations = beam_frames @ np.transpose(beam_reference, (0, 2, 1))  # Q = Lambda Lambda_0^T
     old_start, old_end = window_of(old)
+    # where the new beam takes its state from the old shell: inside it, and at its ends too
+    # when the old hybrid has no beam there
+    fitted_ends = beam is None
 
     # the new shell: the old shell's nodes, then sections placed by the old beam
     new_model = new.shell.model
@@ -269,7 +293,7 @@ def carry_over(old, new) -> None:
 
     # the new beam's nodes: the old beam's, then fitted to the old shell's sections
     target = new.beam.model
-    inside = sections.contains(target.node_points[:, 0])
+    inside = sections.contains(target.node_points[:, 0], ends=fitted_ends)
     target.q.x.array[target.node_theta_dofs] = 0.0
     frames = target.node_reference_frames.copy()
     outside = ~inside
@@ -286,13 +310,10 @@ def carry_over(old, new) -> None:
     target.q.x.scatter_forward()
 
     # the new beam's quadrature points: the old beam's, then fitted
-    points, old_frames, old_curvatures = _gathered(
-        comm, *(beam.quadrature_values(name) for name in ("points", "frame_n", "curvature_n"))
-    )
     new_points = target.quadrature_values("points")
     new_frames = target.quadrature_values("frame_n")
     new_curvatures = target.quadrature_values("curvature_n")
-    inside = sections.contains(new_points[:, 0])
+    inside = sections.contains(new_points[:, 0], ends=fitted_ends)
     k = _match(cKDTree(points), new_points[~inside], scale, "the new beam's quadrature points", comm)
     new_frames[~inside], new_curvatures[~inside] = old_frames[k], old_curvatures[k]
     if inside.any():  # the new beam's frames are still its reference frames
@@ -304,13 +325,14 @@ def carry_over(old, new) -> None:
     # the ties: their ends' section rotations
     for tie in new.ties.values():
         end = np.asarray(tie.end, dtype=float)
-        if sections.contains(end[:1])[0]:
+        if sections.contains(end[:1], ends=fitted_ends)[0]:
             _, Q = sections.fit(end[0], end, tie.section == "flat")
         else:
             Q = rotations[_match(beam_tree, end[None, :], scale, "a new tie's end", comm)[0]]
         tie.turned.value[:] = Q
-    new.beam.committed_load = old.beam.committed_load
-    new._set_load(old.beam.committed_load)
+    if old.beam is not None:  # a full shell's load parameter is its own phase's
+        new.beam.committed_load = old.beam.committed_load
+    new._set_load(new.beam.committed_load)
     for edge, tie in new.ties.items():
         kept = old.ties.get(edge)
         if (
