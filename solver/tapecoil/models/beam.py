@@ -9,7 +9,8 @@ Gamma = Lambda^T r' - Gamma_0 (extension and the two shears) and K = axial(Lambd
 C_M = diag(GJ, EI2, EI3), with Gamma_0 and K_0 those of the stress-free reference (so the
 reference is stress-free exactly, whatever the interpolation of its geometry). Each element
 carries its section (:meth:`GeometricallyExactBeam.set_section`): the stiffnesses, a natural
-curvature K_nat added to K_0 and a constant energy per unit length (a flattened tape's section,
+curvature K_nat added to K_0, a constant energy per unit length and the free edges' relief of a
+flattened coil, a function of the curvature (a flattened tape's section,
 :meth:`BeamSection.flattened_strip`).
 
 Rotations are updated, not totalled (Cardona and Geradin 1988; Ibrahimbegovic 1995). The unknown
@@ -52,8 +53,9 @@ from tapecoil.models.beam_section import BeamSection
 
 __all__ = ["BeamSection", "GeometricallyExactBeam", "create_beam_mesh", "vertices_at"]
 
-# a cell's section as a DG0 vector: EA, GA2, GA3, GJ, EI2, EI3, natural curvature (3), energy offset
-SECTION_FIELDS = 10
+# a cell's section as a DG0 vector: EA, GA2, GA3, GJ, EI2, EI3, natural curvature (3), energy offset,
+# edge relief (5)
+SECTION_FIELDS = 15
 # below this a^2 = |theta|^2 [rad^2] Rodrigues' coefficients are their Taylor series (error < 1e-17)
 SERIES_BELOW = 1e-4
 
@@ -206,8 +208,13 @@ class GeometricallyExactBeam:
         self.natural_share = dolfinx.fem.Constant(mesh, 1.0)
         natural = self.natural_share * ufl.as_vector([c[6], c[7], c[8]])
         bend = self.curvature - self.curvature_0 - natural
+        # the flattened coil's free edges (BeamSection.edge_relief): kappa held above the floor
+        # by a smooth maximum, so that the law stays bounded where it does not hold
+        kappa = c[13] * (self.curvature[1] - self.curvature_0[1])
+        kappa_held = 0.5 * (kappa + ufl.sqrt(kappa**2 + c[14] ** 2))
+        relief = (c[10] + c[11] * kappa) ** 2 * c[12] / ufl.sqrt(kappa_held)
         self.energy_density = (
-            0.5 * ufl.dot(self.strain, C_N * self.strain) + 0.5 * ufl.dot(bend, C_M * bend) + c[9]
+            0.5 * ufl.dot(self.strain, C_N * self.strain) + 0.5 * ufl.dot(bend, C_M * bend) + c[9] - relief
         )
         self.energy = self.energy_density * self.dx  # the solver differentiates it with its terms
         self._next_frame = dolfinx.fem.Expression(self.frame, points)
@@ -237,6 +244,7 @@ class GeometricallyExactBeam:
                 section.EI3,
                 *section.natural_curvature,
                 section.energy_offset,
+                *section.edge_relief,
             ]
         )
         dofs = np.asarray(self.section_fields.function_space.dofmap.list)[np.asarray(cells, dtype=np.int32)]

@@ -21,6 +21,13 @@ class BeamSection:
         GA2, GA3: shear stiffnesses along axes 2 and 3 [N].
         GJ: torsional stiffness [N m^2].
         EI2, EI3: bending stiffnesses about axes 2 and 3 [N m^2].
+        natural_curvature: the section's curvatures when free of moment (torsion, about 2, about
+            3) [1/m].
+        energy_offset: a constant energy per unit length [J/m].
+        edge_relief: (M_R [N], D12 [N m], g [m^(1/2)/(N m)], sign, floor [1/m]): an energy per unit
+            length taken off, (M_R + D12 kappa)^2 g / sqrt(kappa) with kappa = sign K2 held above
+            the floor smoothly (the free edges' relief of a flattened coil,
+            :meth:`flattened_strip`); g = 0: none.
     """
 
     EA: float
@@ -31,6 +38,7 @@ class BeamSection:
     EI3: float
     natural_curvature: tuple[float, float, float] = (0.0, 0.0, 0.0)
     energy_offset: float = 0.0
+    edge_relief: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 1.0, 1.0)
 
     def __post_init__(self):
         for name in ("EA", "GA2", "GA3", "GJ", "EI2", "EI3"):
@@ -43,6 +51,12 @@ class BeamSection:
             )
         if not math.isfinite(self.energy_offset):
             raise ValueError(f"beam section: energy_offset must be a number, got {self.energy_offset!r}")
+        relief = self.edge_relief
+        if len(relief) != 5 or not all(math.isfinite(v) for v in relief) or relief[2] < 0 or relief[4] <= 0:
+            raise ValueError(
+                "beam section: edge_relief must be 5 numbers (M_R, D12, g >= 0, sign, floor > 0), "
+                f"got {relief!r}"
+            )
 
     @classmethod
     def flattened_strip(
@@ -56,6 +70,7 @@ class BeamSection:
         E: float,
         nu: float,
         coil_sign: float = 1.0,
+        axial_stiffness: float | None = None,
     ) -> BeamSection:
         """A tape's section flattened in an opposite-sense coil, as a beam: its energy per unit
         length b w(kappa) = (b/2)(D11 kappa^2 + D22/R^2 + 2 D12 kappa/R) (physics brief Sec. 3 and
@@ -64,8 +79,20 @@ class BeamSection:
         whose natural curvature K2_n = -coil_sign D12/(D11 R) (a flattened strip curls the other
         way by nu/R when let go). The flat strip's other stiffnesses: EA = E b h, EI3 = E h b^3/12,
         GJ = G b h^3/3, shear 5/6 E b h/(2(1 + nu)). Rigidities D [N m], R, width b, h [m], E [Pa].
+
+        With ``axial_stiffness`` S [N/m] (the wall's along the tape, E h isotropic), the free
+        edges' relief of the coil is taken off: Delta U = (D22/R + D12 kappa)^2 / (D22 beta),
+        beta = (S/(4 D22))^(1/4) sqrt(kappa) (:func:`tapecoil.theory.edge_layer`). The layer theory
+        holds where the two edges' layers do not meet, beta b >= 6 say; below that curvature
+        (and for kappa <= 0) kappa is held above it smoothly, so the relief stays bounded, and
+        the law is not to be trusted there: a coil's flattened part, not a straight flattened
+        strip.
         """
         G = E / (2 * (1 + nu))
+        relief = (0.0, 0.0, 0.0, 1.0, 1.0)
+        if axial_stiffness is not None:
+            c0 = (axial_stiffness / (4 * D22)) ** 0.25
+            relief = (D22 / R, D12, 1 / (D22 * c0), coil_sign, (6 / (c0 * width)) ** 2)
         return cls(
             EA=E * width * h,
             GA2=G * width * h * 5 / 6,
@@ -75,6 +102,7 @@ class BeamSection:
             EI3=E * h * width**3 / 12,
             natural_curvature=(0.0, -coil_sign * D12 / (D11 * R), 0.0),
             energy_offset=width / 2 * (D22 - D12**2 / D11) / R**2,
+            edge_relief=relief,
         )
 
     @classmethod

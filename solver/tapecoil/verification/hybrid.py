@@ -72,6 +72,7 @@ def tape_hybrid(
     *,
     start: float = 0.0,
     flat_root: bool = False,
+    edge_relief: bool = False,
     penalty=PENALTY,
     comm=MPI.COMM_WORLD,
     name="verify_hybrid",
@@ -80,7 +81,9 @@ def tape_hybrid(
     ``window`` [m] from ``start`` [m], ``across`` elements across and ``element`` [m] long, tied
     to a beam of the arc section on the rest (on both sides when ``start`` > 0), its elements as
     long; with ``flat_root``, the beam before the window is of the flattened strip's section
-    and tied flat (:meth:`HybridProblem.flatten` flattens it by steps). No supports or loads yet.
+    and tied flat (:meth:`HybridProblem.flatten` flattens it by steps), with ``edge_relief`` the
+    free edges' relief of a coil in its energy (:meth:`BeamSection.flattened_strip`; for a coil,
+    not a straight flattened end). No supports or loads yet.
     Returns (hybrid, the tape's tip [m], a beam node unless the window reaches it)."""
     from tapecoil.models.problem import ShellProblem
 
@@ -117,7 +120,10 @@ def tape_hybrid(
         ties.insert(0, ("xi1_min", (start, 0.0, centroid), "flat" if flat_root else "arc"))
         if flat_root:
             D = tp.E * tp.h**3 / (12 * (1 - tp.nu**2))
-            flat = BeamSection.flattened_strip(D, tp.nu * D, D, tp.R, tp.b, tp.h, tp.E, tp.nu)
+            stiffness = config.wall.axial_stiffness if edge_relief else None
+            flat = BeamSection.flattened_strip(
+                D, tp.nu * D, D, tp.R, tp.b, tp.h, tp.E, tp.nu, axial_stiffness=stiffness
+            )
             owned = np.arange(beam.mesh.topology.index_map(1).size_local, dtype=np.int32)
             middle = dolfinx.mesh.compute_midpoints(beam.mesh, 1, owned)[:, 0]
             beam.model.set_section(owned[middle < start], flat)
