@@ -93,6 +93,27 @@ def test_hybrid_folds_in_its_shell_at_the_fold_moment():
     assert 0.02 < start < end < FOLD_WINDOW - 0.02
 
 
+def test_hybrid_refuses_ties_it_cannot_make():
+    """A tie's edge, its shape and the choice between one end and several are checked before
+    anything is tied."""
+    from tapecoil.models.hybrid_problem import HybridProblem
+
+    hybrid, _ = tape_hybrid(Config(), 4, 0.0125, 0.3, 0.1, start=0.05, name="refusals")
+    shell, beam, centroid = hybrid.shell, hybrid.beam, hybrid.ties["xi1_max"].end[2]
+    node = (0.05, 0.0, centroid)
+    for kwargs, match in (
+        ({"ties": [("xi2_min", node, "arc")]}, "xi1_min or xi1_max"),
+        ({"ties": [("xi1_min", node, "arc"), ("xi1_min", node, "arc")]}, "once each"),
+        ({"ties": [("xi1_min", node, "bent")]}, "section must be one of"),
+        ({"beam_end": node, "ties": [("xi1_min", node, "arc")]}, "either beam_end or ties"),
+        ({}, "either beam_end or ties"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            HybridProblem(shell, beam, modulus=Config().tape.E, **kwargs)
+    with pytest.raises(ValueError, match="flatten needs a flat tie"):
+        hybrid.flatten("xi1_min")
+
+
 def test_hybrid_refuses_a_laminated_wall():
     """The beam's arc section is isotropic: a laminate is refused before anything is built."""
     config = load_config(Path(__file__).parents[1] / "demos" / "cfrp_tape.toml")

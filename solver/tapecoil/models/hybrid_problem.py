@@ -80,7 +80,6 @@ class HybridProblem:
     def energy(self) -> float:
         """The strain energy of shell and beam and the ties' [J] (collective)."""
         comm = self.shell.strip.mesh.comm
-        self.coupling.read()
         return (
             global_scalar(self.shell.model.strain_energy, comm)
             + self.beam.model.strain_energy()
