@@ -14,9 +14,12 @@ from tapecoil.verification.hybrid import (
     CANTILEVER_LENGTH,
     FOLD_WINDOW,
     cantilever_tip_deflection,
+    coiled_shell_fit,
     hybrid_cantilever,
     hybrid_cantilever_problem,
     hybrid_fold,
+    hybrid_window,
+    moved_cantilever,
     tape_hybrid,
 )
 
@@ -196,34 +199,8 @@ def test_carry_over_refuses_windows_that_do_not_fit():
 
 
 def moved_and_direct(comm=MPI.COMM_WORLD, force=0.5, direct=True):
-    """A cantilever of the benchmark section (coarse mesh, root clamped on the beam) with its
-    shell window at 0.05-0.15 m, under a tip force stepped to ``force`` [N]; the window moved
-    on to 0.1-0.2 m (the shell behind turned into beam, the beam ahead into shell) and stepped
-    on by 5 %; with ``direct``, the run with the window at 0.1-0.2 m all along. Returns (moved,
-    direct or None, tip, energies before and after the move, the ties' energy after it)."""
-    from tapecoil.models.window import carry_over
-
-    def build(start, name):
-        hybrid, tip = tape_hybrid(
-            Config(), 4, 0.0125, CANTILEVER_LENGTH, 0.1, start=start, comm=comm, name=name
-        )
-        hybrid.beam.clamp((0.0, 0.0, tip[2]))
-        hybrid.beam.end_load(tip, force=(0.0, 0.0, 1.0))
-        return hybrid, tip
-
-    old, tip = build(0.05, "old")
-    old.solve(force, first_step=force / 8, max_step=force / 8)
-    moved, _ = build(0.1, "moved")
-    before = old.energy()
-    carry_over(old, moved)
-    after = moved.energy()
-    ties = moved.coupling.energy()
-    moved.solve(1.05 * force, first_step=0.05 * force, max_step=0.05 * force)
-    if not direct:
-        return moved, None, tip, (before, after), ties
-    uninterrupted, _ = build(0.1, "direct")
-    uninterrupted.solve(1.05 * force, first_step=force / 8, max_step=force / 8)
-    return moved, uninterrupted, tip, (before, after), ties
+    """The benchmark section's cantilever with its window moved (:func:`moved_cantilever`)."""
+    return moved_cantilever(Config(), force=force, direct=direct, comm=comm)
 
 
 def test_a_window_moved_along_a_loaded_cantilever_reaches_the_uninterrupted_run():
@@ -351,74 +328,15 @@ def test_a_window_moved_along_a_flattened_tape_reaches_the_uninterrupted_run():
 
 
 def coiled_shell_as_hybrid(comm=MPI.COMM_WORLD, edge_relief=False):
-    """Wilson et al.'s steel tape on r_c/R = 0.9 (demos/coiling_tension_steel.toml), 0.12 m of it
-    coiled by 3 rad as a full shell (default mesh), then turned into a hybrid: a beam of the
-    flattened strip's section up to 2.4 rad of winding (with ``edge_relief``, the free edges'
-    relief in its energy), tied flat to the shell beyond. Returns
-    the energies per unit length [J/m] of the shell's coil and of the beam over whole elements
-    from 1 to 2 rad of winding, the beam's curvature there times rho, the ties' energy, and
-    the plate's and the edge layer's laws at rho."""
-    import dataclasses
-
-    import ufl
-
-    from tapecoil import theory
+    """Wilson et al.'s steel tape on r_c/R = 0.9 (demos/coiling_tension_steel.toml), coiled as a
+    full shell and turned into a hybrid (:func:`coiled_shell_fit`)."""
     from tapecoil.app.sweep import load_sweep
     from tapecoil.config import config_from_dict
-    from tapecoil.models.window import carry_over, full_shell
-    from tapecoil.phases.coiling import CoilingModel
-    from tapecoil.phases.coiling_run import CoilingRun
 
     steel = Path(__file__).resolve().parents[1] / "demos" / "coiling_tension_steel.toml"
-    base = config_from_dict(load_sweep(steel).base)
-    tp, wall = base.tape, base.wall
-    r_c = 0.9 * tp.R
-    rho = r_c + tp.h / 2
-    pull = theory.coiling_tension_bending(wall.bending, tp.alpha, tp.R, r_c) + 0.3
-    config = dataclasses.replace(
-        base,
-        tape=dataclasses.replace(tp, L=0.12),
-        hub=dataclasses.replace(base.hub, radius=r_c),
-        coiling=dataclasses.replace(base.coiling, hub_angle=3.0, tension=pull),
-        mesh=dataclasses.replace(base.mesh, preset="default"),
-        contact=dataclasses.replace(base.contact, smoothing=0.0),
+    return coiled_shell_fit(
+        config_from_dict(load_sweep(steel).base), ratio=0.9, edge_relief=edge_relief, comm=comm
     )
-    model = CoilingModel(config, comm)
-    run = CoilingRun(model)
-    run.flatten()
-    run.coil(3.0)
-    shell = model.tape.model
-    length, resolution = config.tape.L, model.tape.strip.resolution
-    element = length / resolution.along
-    start = round(2.4 * rho / element) * element
-    hybrid, _ = tape_hybrid(
-        config,
-        resolution.across,
-        element,
-        length,
-        length - start,
-        start=start,
-        flat_root=True,
-        edge_relief=edge_relief,
-        comm=comm,
-    )
-    carry_over(full_shell(shell), hybrid)
-    model.solver.destroy()
-    s1, s2 = (round(angle * rho / element) * element for angle in (1.0, 2.0))
-
-    def per_length(measure_of):
-        x = ufl.SpatialCoordinate(measure_of)[0]
-        return ufl.conditional(ufl.And(ufl.ge(x, s1), ufl.le(x, s2)), 1.0, 0.0) / (s2 - s1)
-
-    beam = hybrid.beam.model
-    weight = per_length(shell.mesh)
-    shell_energy = sum(global_scalar(form, comm) for form in shell.energy_forms(weight))
-    beam_weight = per_length(beam.mesh)
-    beam_energy = global_scalar(beam_weight * beam.energy_density * beam.dx, comm)
-    curvature = global_scalar(beam_weight * (beam.curvature[1] - beam.curvature_0[1]) * beam.dx, comm)
-    plate = tp.b * theory.energy_density(rho, tp.R, wall.bending)
-    relief = theory.edge_layer(wall.bending, wall.axial_stiffness, tp.R, rho).energy_relief
-    return shell_energy, beam_energy, curvature * rho, hybrid.coupling.energy(), plate, relief
 
 
 def test_a_coiled_shell_turned_into_a_flattened_beam_misses_the_edges_relief():
@@ -443,3 +361,11 @@ def test_a_flattened_beam_with_the_edges_relief_holds_the_shells_coil_energy():
     shell_energy, beam_energy, _, _, plate, relief = coiled_shell_as_hybrid(edge_relief=True)
     assert beam_energy == pytest.approx(plate - relief, rel=1e-3)
     assert beam_energy == pytest.approx(shell_energy, rel=5e-3)
+
+
+def test_hybrid_window_case_passes_on_the_benchmark_tape():
+    """``tapecoil verify hybrid-window`` on the benchmark tape and its hub (r_c/R = 0.84), where
+    the edges' relief is 3.0 % of the coil's energy."""
+    result = hybrid_window(Config())
+    failed = [(c.name, c.computed, c.error) for c in result.checks if not c.passed]
+    assert not failed, failed

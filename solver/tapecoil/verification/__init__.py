@@ -18,6 +18,7 @@ CASES = (
     "beam-turns",
     "hybrid-cantilever",
     "hybrid-fold",
+    "hybrid-window",
 )
 
 

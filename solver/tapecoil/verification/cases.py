@@ -22,7 +22,7 @@ from tapecoil.verification.beam import (
     beam_turns,
 )
 from tapecoil.verification.checks import CaseResult
-from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_fold
+from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_fold, hybrid_window
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
     ROLLUP_MESHES,
@@ -78,7 +78,9 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = hybrid_cantilever(config, resolution, comm=comm)
     elif name == "hybrid-fold":
         result = hybrid_fold(config, tape_res, comm=comm)
+    elif name == "hybrid-window":
+        result = hybrid_window(config, comm=comm)  # on meshes of its own, whatever the preset
     else:
         result = tape_fold(config, tape_res, comm=comm)
-    result.info["preset"] = preset
+    result.info.setdefault("preset", preset)  # a case on meshes of its own names them
     return result

@@ -310,3 +310,156 @@ def hybrid_fold(
         },
         model=hybrid.shell.model,
     )
+
+
+def coiled_shell_fit(
+    config: Config, *, ratio: float | None = None, edge_relief: bool = False, comm=MPI.COMM_WORLD
+) -> tuple[float, float, float, float, float, float]:
+    """The tape of ``config`` on a hub of radius ``ratio`` R (``config``'s hub when None), 0.12 m
+    of it coiled by 3 rad as a full shell (default mesh, the pull Eq. 2.6 + 0.3 N), then turned
+    into a hybrid (:func:`tapecoil.models.window.full_shell`): a beam of the flattened strip's
+    section up to 2.4 rad of winding (with ``edge_relief``, the free edges' relief in its
+    energy), tied flat to the shell beyond. Returns the energies per unit length [J/m] of the
+    shell's coil and of the beam over whole elements from 1 to 2 rad of winding, the beam's
+    curvature there times rho, the ties' energy [J], and the plate's energy per unit length
+    b w(rho) and the edges' relief [J/m] (collective)."""
+    import dataclasses
+
+    import ufl
+
+    from tapecoil.models.window import carry_over, full_shell
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+
+    tp, wall = config.tape, config.wall
+    r_c = config.hub.radius if ratio is None else ratio * tp.R
+    rho = r_c + tp.h / 2
+    pull = theory.coiling_tension_bending(wall.bending, tp.alpha, tp.R, r_c) + 0.3
+    case = dataclasses.replace(
+        config,
+        tape=dataclasses.replace(tp, L=0.12),
+        hub=dataclasses.replace(config.hub, radius=r_c),
+        coiling=dataclasses.replace(config.coiling, hub_angle=3.0, tension=pull),
+        mesh=dataclasses.replace(config.mesh, preset="default"),
+        contact=dataclasses.replace(config.contact, smoothing=0.0),
+    )
+    model = CoilingModel(case, comm)
+    run = CoilingRun(model)
+    run.flatten()
+    run.coil(3.0)
+    shell = model.tape.model
+    length, resolution = case.tape.L, model.tape.strip.resolution
+    element = length / resolution.along
+    start = round(2.4 * rho / element) * element
+    hybrid, _ = tape_hybrid(
+        case,
+        resolution.across,
+        element,
+        length,
+        length - start,
+        start=start,
+        flat_root=True,
+        edge_relief=edge_relief,
+        comm=comm,
+    )
+    carry_over(full_shell(shell), hybrid)
+    model.solver.destroy()
+    s1, s2 = (round(angle * rho / element) * element for angle in (1.0, 2.0))
+
+    def per_length(mesh):
+        x = ufl.SpatialCoordinate(mesh)[0]
+        return ufl.conditional(ufl.And(ufl.ge(x, s1), ufl.le(x, s2)), 1.0, 0.0) / (s2 - s1)
+
+    beam = hybrid.beam.model
+    shell_energy = sum(global_scalar(form, comm) for form in shell.energy_forms(per_length(shell.mesh)))
+    weight = per_length(beam.mesh)
+    beam_energy = global_scalar(weight * beam.energy_density * beam.dx, comm)
+    curvature = global_scalar(weight * (beam.curvature[1] - beam.curvature_0[1]) * beam.dx, comm)
+    plate = tp.b * theory.energy_density(rho, tp.R, wall.bending)
+    relief = theory.edge_layer(wall.bending, wall.axial_stiffness, tp.R, rho).energy_relief
+    return shell_energy, beam_energy, curvature * rho, hybrid.coupling.energy(), plate, relief
+
+
+def moved_cantilever(config: Config, *, force: float = 0.5, direct: bool = True, comm=MPI.COMM_WORLD):
+    """A cantilever of ``config``'s section (coarse mesh, 0.3 m, root clamped on the beam) with
+    its shell window at 0.05-0.15 m, under a tip force stepped to ``force`` [N]; the window moved
+    on to 0.1-0.2 m (the shell behind turned into beam, the beam ahead into shell) and stepped on
+    by 5 %; with ``direct``, the run with the window at 0.1-0.2 m all along. Returns (moved,
+    direct or None, tip, energies before and after the move, the ties' energy after it)."""
+    from tapecoil.models.window import carry_over
+
+    def build(start, name):
+        hybrid, tip = tape_hybrid(
+            config, 4, 0.0125, CANTILEVER_LENGTH, 0.1, start=start, comm=comm, name=name
+        )
+        hybrid.beam.clamp((0.0, 0.0, tip[2]))
+        hybrid.beam.end_load(tip, force=(0.0, 0.0, 1.0))
+        return hybrid, tip
+
+    old, tip = build(0.05, "moved_old")
+    old.solve(force, first_step=force / 8, max_step=force / 8, solver_config=config.solver)
+    moved, _ = build(0.1, "moved")
+    before = old.energy()
+    carry_over(old, moved)
+    after = moved.energy()
+    ties = moved.coupling.energy()
+    moved.solve(1.05 * force, first_step=0.05 * force, max_step=0.05 * force, solver_config=config.solver)
+    if not direct:
+        return moved, None, tip, (before, after), ties
+    uninterrupted, _ = build(0.1, "moved_direct")
+    uninterrupted.solve(1.05 * force, first_step=force / 8, max_step=force / 8, solver_config=config.solver)
+    return moved, uninterrupted, tip, (before, after), ties
+
+
+def hybrid_window(config: Config, comm=MPI.COMM_WORLD) -> CaseResult:
+    """``hybrid-window``: the window moved and a coil turned into beam.
+
+    - The window moved by 0.05 m along a loaded cantilever (:func:`moved_cantilever`): one step
+      on, as the run that had the window there all along (tip to 2e-5 of L, energy to 1e-3);
+      they differ by the new tie's kept shape, the shell's section as it was.
+    - A coil of ``config``'s tape on its hub, as a full shell, turned into a flattened-strip beam
+      behind a window (:func:`coiled_shell_fit`): the beam reads the coil's curvature
+      (consistency: the hub imposes it, 0.5 %); its energy per unit length is the plate's
+      b w(rho) (0.5 %), above the shell's by the free edges' relief (its share of the shell's
+      energy against theory.edge_layer's, 10 %); with the relief in its energy it holds the
+      shell's (0.5 %).
+    """
+    t0 = time.perf_counter()
+    moved, direct, tip, (before, after), ties = moved_cantilever(config, comm=comm)
+    gap = float(np.linalg.norm(moved.beam.position(tip) - direct.beam.position(tip))) / CANTILEVER_LENGTH
+    shell_energy, plate_beam, curvature, fit_ties, plate, relief = coiled_shell_fit(config, comm=comm)
+    relieved_beam = coiled_shell_fit(config, edge_relief=True, comm=comm)[1]
+    checks = [
+        Check("moved window: tip's distance from the uninterrupted run's / L", gap, 0.0, 2e-5, absolute=True),
+        Check("moved window: energy / the uninterrupted run's", moved.energy() / direct.energy(), 1.0, 1e-3),
+        Check("coil fit: the beam's curvature x rho (consistency)", curvature, 1.0, 5e-3),
+        Check("coil fit: the flattened beam's energy / the plate's b w(rho)", plate_beam / plate, 1.0, 5e-3),
+        Check(
+            "coil fit: (beam / shell - 1) / the edges' relief share",
+            (plate_beam / shell_energy - 1) / (relief / (plate - relief)),
+            1.0,
+            0.1,
+        ),
+        Check(
+            "coil fit: the beam with the edges' relief / the shell", relieved_beam / shell_energy, 1.0, 5e-3
+        ),
+    ]
+    return CaseResult(
+        "hybrid-window",
+        checks,
+        {
+            "preset": "coarse and default",
+            "mesh": "the cantilever 4 x 24 elements, the coil 9 x 30",
+            "energy_change_at_the_move": after / before - 1,
+            "ties_energy_after_the_move": ties,
+            "coil_energy_per_length": {
+                "shell": shell_energy,
+                "beam": plate_beam,
+                "beam_with_edges": relieved_beam,
+                "plate": plate,
+                "plate_less_edges": plate - relief,
+            },
+            "coil_fit_ties_energy": fit_ties,
+            "wall_time": time.perf_counter() - t0,
+        },
+    )
