@@ -215,23 +215,22 @@ class RigidSectionTie:
         from scipy.spatial import cKDTree
 
         comm = self.shell.mesh.comm
-        spaces = []
-        for tie in (other, self):
-            space = tie.kept_offset.function_space
-            points = space.tabulate_dof_coordinates()[:, :2]
-            spaces.append((points, tie))
-        (old_points, _), (new_points, _) = spaces
-        gathered = [
+        old_points, offsets, normals = (
             np.concatenate(comm.allgather(a))
-            for a in (old_points, *(f.x.array.reshape(-1, 3) for f in (other.kept_offset, other.kept_normal)))
-        ]
-        tree = cKDTree(gathered[0])
+            for a in (
+                other.kept_offset.function_space.tabulate_dof_coordinates()[:, :2],
+                other.kept_offset.x.array.reshape(-1, 3),
+                other.kept_normal.x.array.reshape(-1, 3),
+            )
+        )
+        new_points = self.kept_offset.function_space.tabulate_dof_coordinates()[:, :2]
+        tree = cKDTree(old_points)
         distance, index = tree.query(new_points) if len(new_points) else (np.zeros(0), np.zeros(0, int))
         scale = 1e-9 * (1.0 + abs(self.end[0]))
         on_edge = np.isclose(new_points[:, 0], self.end[0], rtol=0, atol=scale)
         if comm.allreduce(float(distance[on_edge].max(initial=0.0)), op=MPI.MAX) > scale:
             raise ValueError("copy_shape: the two ties' edges do not share their nodes")
-        for field, values in ((self.kept_offset, gathered[1]), (self.kept_normal, gathered[2])):
+        for field, values in ((self.kept_offset, offsets), (self.kept_normal, normals)):
             array = field.x.array.reshape(-1, 3)
             array[:] = 0.0
             array[on_edge] = values[index[on_edge]]
