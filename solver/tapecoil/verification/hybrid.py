@@ -119,10 +119,10 @@ def tape_hybrid(
     if start > 0:
         ties.insert(0, ("xi1_min", (start, 0.0, centroid), "flat" if flat_root else "arc"))
         if flat_root:
-            D = config.wall.bending
+            D = tp.E * tp.h**3 / (12 * (1 - tp.nu**2))
             stiffness = config.wall.axial_stiffness if edge_relief else None
             flat = BeamSection.flattened_strip(
-                D.D11, D.D12, D.D22, tp.R, tp.b, tp.h, tp.E, tp.nu, axial_stiffness=stiffness
+                D, tp.nu * D, D, tp.R, tp.b, tp.h, tp.E, tp.nu, axial_stiffness=stiffness
             )
             owned = np.arange(beam.mesh.topology.index_map(1).size_local, dtype=np.int32)
             middle = dolfinx.mesh.compute_midpoints(beam.mesh, 1, owned)[:, 0]
