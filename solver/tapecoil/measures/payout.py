@@ -72,7 +72,7 @@ def steady_torque(rho: float, pull: float, config) -> float:
     return rho * (pull + tp.b * theory.energy_density(rho, tp.R, config.wall.bending, config.coiling.sense))
 
 
-def _station(angle: float) -> float:
+def outer_station(angle: float) -> float:
     """The winding behind the tangent point [rad] at which to read the outer turn: in
     OUTER_STATION (cut short so that it stays STATION_MARGIN ahead of the root) and as far as the
     band allows from the outer turn's climb over the root end, which lies (hub angle mod 2 pi)
@@ -110,7 +110,7 @@ def outer_turn_tension(tape, sections, pull: float, lam: float, angle: float) ->
     radius, _ = tape.contact.polar(sections["columns"].T)
     cut_radius = 0.5 * (radius[:-1] + radius[1:])
     psi = np.interp(sections["xi1"], line["xi1"], line["psi"])
-    behind = _station(angle)
+    behind = outer_station(angle)
     k = int(np.argmin(np.abs(psi - (angle - behind))))
     rho = float(cut_radius[k])
     return {

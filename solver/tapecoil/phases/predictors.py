@@ -71,6 +71,33 @@ class AlongTape:
         return out
 
 
+def wound_length(contact, angle_from: float, angle_to: float) -> float:
+    """The length [m] of tape the hub winds on from ``angle_from`` to ``angle_to`` [rad]: the
+    mid-surface radius of the turn being wound (``contact``'s spiral) times the angle."""
+    radius = float(contact.spiral_radius(np.array([angle_from]))[0]) + 0.5 * contact.h
+    return radius * (angle_to - angle_from)
+
+
+def turn_wound(
+    q, current, nodes, psi, frame, angle_from: float, dtheta: float, keep_theta_0: bool = True
+) -> None:
+    """Turn the material already on the coil rigidly with the hub in the guess ``q`` (W-dof
+    array) from the converged state ``current``: nodes wound more than a radian behind the
+    tangent point (winding angle ``psi`` below ``angle_from`` - 1) by the hub's step ``dtheta``
+    [rad], blended into the guess already in ``q`` over the radian before it. ``keep_theta_0``:
+    the wound nodes keep their converged theta_0 (else the guess's, blended the same way)."""
+    w = smoothstep(angle_from - psi)[:, None]
+    x = nodes.positions(current)
+    turned = frame.turn_points(x, dtheta) - nodes.reference
+    q[nodes.u_dofs] = w * turned.T + (1 - w) * q[nodes.u_dofs]
+    # a turn about the width axis changes theta_1 alone
+    rotated = current[nodes.theta_dofs[:, 1]] + frame.director_angle_change(dtheta)
+    q[nodes.theta_dofs[:, 1]] = w[:, 0] * rotated + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 1]]
+    if keep_theta_0:
+        kept = current[nodes.theta_dofs[:, 0]]
+        q[nodes.theta_dofs[:, 0]] = w[:, 0] * kept + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 0]]
+
+
 class CoilingPredictor:
     """The predictor ``kind`` ("shift" or "secant") of a coiling run on ``tape`` (a TapeOnHub).
 
@@ -104,8 +131,7 @@ class CoilingPredictor:
         c = self.tape.contact
         nodes = c.nodes
         if self.kind == "shift":
-            turn_radius = float(c.spiral_radius(np.array([angle_from]))[0]) + 0.5 * c.h
-            ds = turn_radius * dtheta
+            ds = wound_length(c, angle_from, angle_to)
             shifted = self._along_tape.values_at(current, -ds)
             q[nodes.u_dofs] = shifted[:, :3] - np.array([ds, 0.0, 0.0])
             q[nodes.theta_dofs] = shifted[:, 3:]
@@ -113,16 +139,9 @@ class CoilingPredictor:
             last = self._converged[-2] if len(self._converged) == 2 else None
             if last is not None and angle_from - last[0] > 0:
                 q += (current - last[1]) * (dtheta / (angle_from - last[0]))
-        w = smoothstep(angle_from - c.psi.x.array)[:, None]
-        x = nodes.positions(current)
-        turned = self.tape.frame.turn_points(x, dtheta) - nodes.reference
-        q[nodes.u_dofs] = w * turned.T + (1 - w) * q[nodes.u_dofs]
-        # a turn about the width axis changes theta_1 alone
-        rotated = current[nodes.theta_dofs[:, 1]] + self.tape.frame.director_angle_change(dtheta)
-        q[nodes.theta_dofs[:, 1]] = w[:, 0] * rotated + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 1]]
-        if self.kind == "shift":
-            kept = current[nodes.theta_dofs[:, 0]]
-            q[nodes.theta_dofs[:, 0]] = w[:, 0] * kept + (1 - w[:, 0]) * q[nodes.theta_dofs[:, 0]]
+        turn_wound(
+            q, current, nodes, c.psi.x.array, self.tape.frame, angle_from, dtheta, self.kind == "shift"
+        )
 
     def remember(self, angle: float, state: np.ndarray) -> None:
         """A converged state at hub angle ``angle`` (kept for the secant)."""
