@@ -309,4 +309,6 @@ class GeometricallyExactBeam:
 
     def strain_energy(self) -> float:
         """The beam's strain energy [J] (collective)."""
-        return global_scalar(self.energy, self.mesh.comm)
+        if getattr(self, "_energy_form", None) is None:
+            self._energy_form = dolfinx.fem.form(self.energy)  # compiled once, not at every call
+        return global_scalar(self._energy_form, self.mesh.comm)

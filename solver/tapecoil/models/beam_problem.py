@@ -13,7 +13,7 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.core import compat
-from tapecoil.core.dofs import owned_subspace_dofs
+from tapecoil.core.dofs import assemble_into, owned_subspace_dofs
 from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.rotation import rotation_matrix
 from tapecoil.core.smoothing import penetration_ufl
@@ -43,9 +43,11 @@ class BeamProblem:
         self.bcs: list = []
         self.point_forces: list[PointForce] = []
         self.energy_terms: list = []  # UFL energies beside the beam's own (contact)
-        # (u function or None, theta function, point, axis point, axis): nodes turned by the load
+        # (u function or None, theta function, point, axis point, axis, place at load 0): nodes
+        # turned by the load
         self._turning: list[tuple] = []
         self._winding: list = []  # the winding contacts' updates of their angles
+        self._winding_angles: list = []  # (angles, their nodes' reference points, update)
         self._predictors: list = []  # initial guesses of a step: predict(load_from, load_to)
         self.history: list[StepRecord] = []
 
@@ -63,26 +65,31 @@ class BeamProblem:
         self.bcs.append(dolfinx.fem.dirichletbc(values, dofs, space))
         return values
 
-    def clamp(self, point, turning_about: tuple | None = None) -> None:
+    def clamp(self, point, turning_about: tuple | None = None, at=None) -> None:
         """Hold the node at ``point`` [m]: its displacement and rotation. ``turning_about`` =
         (a point of the axis [m], the axis's direction): the clamp turns about that axis by the
-        load parameter [rad] (a hub that the beam's root is fixed to)."""
+        load parameter [rad] (a hub that the beam's root is fixed to). ``at``: where the node is
+        held at load 0 [m] (default ``point``; a flattened tape's line, which lies off its arc's
+        centroid line)."""
         vertices = self._vertices(point)
         u_values = self._dirichlet((0,), vertices)
         theta_values = self._dirichlet((1,), vertices)
+        point = np.asarray(point, dtype=float)
+        place = point if at is None else np.asarray(at, dtype=float)
         if turning_about is not None:
             centre, axis = (np.asarray(v, dtype=float) for v in turning_about)
             axis = axis / np.linalg.norm(axis)
-            self._turning.append((u_values, theta_values, np.asarray(point, dtype=float), centre, axis))
+            self._turning.append((u_values, theta_values, point, centre, axis, place))
+        else:
+            u_values.x.array[:] = np.tile(place - point, len(u_values.x.array) // 3)
 
     def turn(self, point, axis) -> None:
         """Turn the node at ``point`` [m] by the load parameter [rad] about ``axis``, its
         displacement free: a rigid end section turned, which carries a pure moment."""
         a = np.asarray(axis, dtype=float)
         theta_values = self._dirichlet((1,), self._vertices(point))
-        self._turning.append(
-            (None, theta_values, np.asarray(point, dtype=float), None, a / np.linalg.norm(a))
-        )
+        point = np.asarray(point, dtype=float)
+        self._turning.append((None, theta_values, point, None, a / np.linalg.norm(a), point))
 
     def hold(self, point, components: tuple[int, ...], rotation: bool = False) -> None:
         """Hold the displacement components ``components`` (0, 1, 2: x, y, z) of the node at
@@ -183,6 +190,7 @@ class BeamProblem:
 
         psi.x.array[:] = self.committed_load - swept()
         self._winding.append(update)
+        self._winding_angles.append((psi, nodes, update))
         self._predictors.append(predict)
         d = ufl.SpatialCoordinate(self.mesh) + self.model.u - ufl.as_vector(centre.tolist())
         av = ufl.as_vector(a.tolist())
@@ -190,6 +198,31 @@ class BeamProblem:
         penetration = penetration_ufl(obstacle(psi) - ufl.sqrt(ufl.dot(radial, radial)), smoothing)
         self.energy_terms.append(0.5 * penalty * penetration**2 * self.model.dx)
         return psi
+
+    def add_predictor(self, predict) -> None:
+        """Another initial guess of each step, ``predict(load_from, load_to)``, which sets the
+        state from the converged one (after the winding contacts' own)."""
+        self._predictors.append(predict)
+
+    def slide(self, beyond: float, along) -> None:
+        """Predict each step by sliding the nodes beyond ``beyond`` [m] along the tape by
+        ``along(load_from, load_to)`` [m] in -x: a straight part that runs towards a hub at the
+        length it winds on (its frames kept)."""
+        dofs = self.model.node_u_dofs[self.model.node_points[:, 0] > beyond, 0]
+
+        def predict(load_from: float, load_to: float) -> None:
+            self.model.q.x.array[dofs] -= along(load_from, load_to)
+
+        self.add_predictor(predict)
+
+    def set_winding(self, estimate) -> None:
+        """The winding angles of every winding contact from ``estimate(x)`` [rad] (numpy, x the
+        nodes' reference coordinate along the tape), each node then put on the branch of its
+        angle nearest the estimate at the present state and load (a state carried over from
+        another model of the tape, whose angles the estimate gives to within half a turn)."""
+        for psi, nodes, update in self._winding_angles:
+            psi.x.array[:] = estimate(nodes[:, 0])
+            update()
 
     def forms(self) -> tuple:
         """The residual and Jacobian (UFL) of the beam's energy and the energies beside it."""
@@ -200,10 +233,10 @@ class BeamProblem:
 
     def _set_load(self, value: float) -> None:
         self.load.value = value
-        for u_values, theta_values, point, centre, axis in self._turning:
+        for u_values, theta_values, point, centre, axis, place in self._turning:
             if u_values is not None:
                 R = rotation_matrix(axis, value)
-                u = R @ (point - centre) + centre - point
+                u = R @ (place - centre) + centre - point
                 u_values.x.array[:] = np.tile(u, len(u_values.x.array) // 3)
             increment = (value - self.committed_load) * axis  # the rotation since the last accepted step
             theta_values.x.array[:] = np.tile(increment, len(theta_values.x.array) // 3)
@@ -286,6 +319,18 @@ class BeamProblem:
         x = np.concatenate(comm.allgather(where.reshape(-1, 3)))
         N = np.concatenate(comm.allgather(force.reshape(-1)))
         return x, N
+
+    def internal_force(self, point) -> np.ndarray:
+        """The force [N] that the beam's energy and the energies beside it (contact) put on the
+        node at ``point``, dE/du there: the load its support carries (collective)."""
+        if getattr(self, "_internal_form", None) is None:
+            energy = self.model.energy + sum(self.energy_terms)
+            self._internal_form = dolfinx.fem.form(ufl.derivative(energy, self.model.q, self.model.dq))
+            self._internal_vector = dolfinx.fem.Function(self.model.W)
+        f = assemble_into(self._internal_vector, self._internal_form)
+        vertices = self._vertices(point)
+        local = np.array([f[owned_subspace_dofs(self.model.W, (0, i), 0, vertices)].sum() for i in range(3)])
+        return self.mesh.comm.allreduce(local, op=MPI.SUM)
 
     def position(self, point) -> np.ndarray:
         """The current position [m] of the node whose reference position is ``point`` (collective)."""

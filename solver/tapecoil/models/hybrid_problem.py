@@ -112,6 +112,11 @@ class HybridProblem:
         for tie in self.ties.values():
             tie.commit()  # reads its end's rotation increment before the beam sets it to zero
         self.beam._commit()
+        self.shell.commit(self.beam.committed_load)
+
+    def _predict(self, load_from: float, load_to: float) -> None:
+        self.beam._predict(load_from, load_to)
+        self.shell.predict(load_from, load_to)
 
     def _solver(self, F_s, J_s, settings: SolverConfig, options: dict | None) -> CoupledSNESSolver:
         """The joint Newton solver of the shell's forms ``F_s``, ``J_s`` and the beam's."""
@@ -141,9 +146,11 @@ class HybridProblem:
         on_step=None,
         solver_config: SolverConfig | None = None,
         options: dict | None = None,
+        easy_iterations: int = 5,
     ) -> list[StepRecord]:
         """Step the load parameter from where it is to ``load`` (adaptive, with cut-back), steps
-        in the parameter's units; raises :class:`~tapecoil.core.stepping.ContinuationError` with
+        in the parameter's units, grown after steps of at most ``easy_iterations`` Newton
+        iterations; raises :class:`~tapecoil.core.stepping.ContinuationError` with
         the last converged state kept when no step converges.
 
         ``relaxation``: the starting viscosity [N/m^3] of pseudo-transient relaxation on the
@@ -180,7 +187,8 @@ class HybridProblem:
             relaxation=relax,
             commit=self._commit,
             on_step=on_step,
-            predict=self.beam._predict if self.beam._predictors else None,
+            predict=self._predict,
+            easy_iterations=easy_iterations,
         )
         t0 = time.perf_counter()
         try:

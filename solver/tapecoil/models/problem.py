@@ -112,6 +112,14 @@ class ShellProblem:
         for motion in self._motions:
             motion.set(value)
 
+    def commit(self, load: float) -> None:
+        """After an accepted step at the load parameter ``load``: nothing here; a problem that
+        keeps state read from the converged one (a hub's winding angles) updates it."""
+
+    def predict(self, load_from: float, load_to: float) -> None:
+        """The initial guess of a step from ``load_from`` to ``load_to``: the converged state as
+        it is here; a problem that knows better (material turning with a hub) sets it."""
+
     def symmetry_plane(self, edge: str, normal) -> None:
         """The edge lies on a plane of symmetry with unit ``normal`` (+-x, +-y or +-z): see
         :func:`~tapecoil.models.supports.symmetry_plane`."""

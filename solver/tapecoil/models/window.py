@@ -294,6 +294,11 @@ def carry_over(old, new) -> None:
     # the new beam's nodes: the old beam's, then fitted to the old shell's sections
     target = new.beam.model
     inside = sections.contains(target.node_points[:, 0], ends=fitted_ends)
+    if len(beam_points) and not fitted_ends:
+        # at an end of the old shell that no old beam node continues (the root of a window that
+        # started there), the shell's section is the state's
+        distance = beam_tree.query(target.node_points)[0] if len(target.node_points) else np.zeros(0)
+        inside |= sections.contains(target.node_points[:, 0], ends=True) & (distance > tolerance)
     target.q.x.array[target.node_theta_dofs] = 0.0
     frames = target.node_reference_frames.copy()
     outside = ~inside
