@@ -19,12 +19,17 @@ CASES = (
     "hybrid-cantilever",
     "hybrid-fold",
     "hybrid-window",
+    "hybrid-coil",
 )
 
 
 def not_applicable(name: str, config) -> str | None:
     """Why the case ``name`` cannot run on the tape of ``config`` (None: it can). The hybrid's
-    beam takes an isotropic arc section."""
+    beam takes an isotropic arc section; its coiling is the opposite sense's, on the spiral."""
     if name.startswith("hybrid-") and config.laminate.kind != "isotropic":
         return "the hybrid's beam takes an isotropic arc section, and this tape's wall is laminated"
+    if name == "hybrid-coil" and config.coiling.sense != "opposite":
+        return "the hybrid coils in the opposite sense only, and this tape is coiled in the equal sense"
+    if name == "hybrid-coil" and config.contact.turns != "spiral":
+        return "the hybrid's beam rests on the spiral of turns, and this run's turns touch by their surfaces"
     return None

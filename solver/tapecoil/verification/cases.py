@@ -22,7 +22,13 @@ from tapecoil.verification.beam import (
     beam_turns,
 )
 from tapecoil.verification.checks import CaseResult
-from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_fold, hybrid_window
+from tapecoil.verification.hybrid import (
+    CANTILEVER_LENGTH,
+    hybrid_cantilever,
+    hybrid_coil,
+    hybrid_fold,
+    hybrid_window,
+)
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
     ROLLUP_MESHES,
@@ -80,6 +86,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = hybrid_fold(config, tape_res, comm=comm)
     elif name == "hybrid-window":
         result = hybrid_window(config, comm=comm)  # on meshes of its own, whatever the preset
+    elif name == "hybrid-coil":
+        result = hybrid_coil(config, preset, comm=comm)
     else:
         result = tape_fold(config, tape_res, comm=comm)
     result.info.setdefault("preset", preset)  # a case on meshes of its own names them

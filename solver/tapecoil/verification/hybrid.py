@@ -34,7 +34,6 @@ from __future__ import annotations
 import math
 import time
 
-import dolfinx
 import numpy as np
 from mpi4py import MPI
 
@@ -43,10 +42,10 @@ from tapecoil.config import Config
 from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.geometry.surfaces import StripGeometry
-from tapecoil.models.beam_problem import BeamProblem
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.hybrid_problem import HybridProblem
 from tapecoil.models.materials import ShellMaterial
+from tapecoil.models.tape_beam import tape_beam
 from tapecoil.verification.checks import CaseResult, Check
 
 CANTILEVER_LENGTH = 0.3  # [m]
@@ -56,11 +55,6 @@ PENALTY = 1e3
 # [m] of shell at the root of the folded tape: room for the fold grown to pi and its transitions
 # (with 0.2 m the plateau comes out 6 % above the full shell's, the fold feeling the window's ends)
 FOLD_WINDOW = 0.3
-
-
-def _section_frame(x: np.ndarray) -> np.ndarray:
-    """The beam's frame along a straight tape: along x, the chord (y), towards the centre (z)."""
-    return np.broadcast_to(np.eye(3), (x.shape[1], 3, 3))
 
 
 def tape_hybrid(
@@ -87,10 +81,6 @@ def tape_hybrid(
     Returns (hybrid, the tape's tip [m], a beam node unless the window reaches it)."""
     from tapecoil.models.problem import ShellProblem
 
-    if config.laminate.kind != "isotropic":
-        raise ValueError(
-            "the hybrid's beam takes an isotropic arc section: [laminate] kind must be isotropic"
-        )
     tp = config.tape
     centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
     shell = ShellProblem(
@@ -106,27 +96,18 @@ def tape_hybrid(
     spans = ([(0.0, start)] if start > 0 else []) + ([] if to_the_end else [(end, length)])
     if not spans:
         raise ValueError("tape_hybrid: the window covers the whole tape; that is the full shell")
-    beam = BeamProblem(
-        lambda s: np.column_stack([s, 0 * s, 0 * s + centroid]),
+    beam = tape_beam(
+        config,
         spans,
-        [max(1, round((b - a) / element)) for a, b in spans],
-        BeamSection.circular_arc(tp.R, tp.alpha, tp.h, tp.E, tp.nu),
-        _section_frame,
+        element,
+        flat_before=start if flat_root else 0.0,
+        edge_relief=edge_relief,
         comm=comm,
         name=f"{name}_beam",
     )
     ties = [] if to_the_end else [("xi1_max", (end, 0.0, centroid), "arc")]
     if start > 0:
         ties.insert(0, ("xi1_min", (start, 0.0, centroid), "flat" if flat_root else "arc"))
-        if flat_root:
-            D = tp.E * tp.h**3 / (12 * (1 - tp.nu**2))
-            stiffness = config.wall.axial_stiffness if edge_relief else None
-            flat = BeamSection.flattened_strip(
-                D, tp.nu * D, D, tp.R, tp.b, tp.h, tp.E, tp.nu, axial_stiffness=stiffness
-            )
-            owned = np.arange(beam.mesh.topology.index_map(1).size_local, dtype=np.int32)
-            middle = dolfinx.mesh.compute_midpoints(beam.mesh, 1, owned)[:, 0]
-            beam.model.set_section(owned[middle < start], flat)
     hybrid = HybridProblem(shell, beam, ties=ties, modulus=tp.E, penalty=penalty, name=name)
     return hybrid, (length, 0.0, centroid)
 
@@ -462,4 +443,117 @@ def hybrid_window(config: Config, comm=MPI.COMM_WORLD) -> CaseResult:
             "coil_fit_ties_energy": fit_ties,
             "wall_time": time.perf_counter() - t0,
         },
+    )
+
+
+# [rad] the hybrid-coil case's hub angle: the window leaves the root once (at 4 rad on the
+# coarse mesh) and the coil then grows on the flattened beam
+COIL_ANGLE = 5.0
+# [rad] the outer turn's coiling tension is compared as its mean over the steps from this hub
+# angle on: per step it swings as nodes pass the lift-off (docs/hybrid.md)
+TENSION_FROM = 6.0
+
+
+def _band_mean(angles, values, start: float) -> float | None:
+    picked = [v for a, v in zip(angles, values, strict=True) if a >= start and v is not None]
+    return float(np.mean(picked)) if picked else None
+
+
+def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_WORLD) -> dict:
+    """The tape of ``config`` coiled to ``angle`` [rad] by the hybrid
+    (:class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`, the window moved with the lift-off)
+    and by the full shell (:class:`~tapecoil.phases.coiling_run.CoilingRun`), one after the other
+    on the mesh ``preset``. Returns, for each (``"hybrid"``, ``"full_shell"``): the strain energy
+    [J], coiled length and outer coil radius [m], the outer turn's coiling tension [N] averaged
+    over the steps from TENSION_FROM on (None on a shorter run), DOFs, steps, Newton iterations
+    and wall time [s]; and the hybrid's windows (collective)."""
+    import dataclasses
+
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+    from tapecoil.phases.hybrid_coiling import HybridCoiling
+
+    case = dataclasses.replace(
+        config,
+        mesh=dataclasses.replace(config.mesh, preset=preset),
+        coiling=dataclasses.replace(config.coiling, hub_angle=angle),
+    )
+    pull = case.coiling.tension
+    t0 = time.perf_counter()
+    hybrid = HybridCoiling(case, comm)
+    outer = []
+
+    def read_outer(record):
+        if record.hub_angle >= TENSION_FROM:
+            outer.append((record.hub_angle, (hybrid.outer_turn_tension() or {}).get("coiling_tension_outer")))
+
+    hybrid.flatten()
+    hybrid.coil(angle, on_step=read_outer)
+    hybrid_wall = time.perf_counter() - t0
+    geometry = hybrid.coil_geometry()
+    h = hybrid.hybrid
+    results = {
+        "hybrid": {
+            "strain_energy": hybrid.strain_energy(),
+            **geometry,
+            "coiling_tension_outer": _band_mean([a for a, _ in outer], [t for _, t in outer], TENSION_FROM),
+            "dofs": global_size(h.shell.model.W) + global_size(h.beam.model.W),
+            "steps": len(hybrid.records),
+            "newton_iterations": sum(r.iterations for r in hybrid.records),
+            "wall_time": hybrid_wall,
+        },
+        "windows": [list(m) for m in hybrid.moves],
+    }
+
+    t0 = time.perf_counter()
+    model = CoilingModel(case, comm)
+    run = CoilingRun(model)
+    run.flatten()
+    run.coil(angle)
+    full_wall = time.perf_counter() - t0
+    rows = run.result.history
+    coiling = [r for r in rows if r["phase"] == "coil"]
+    last = rows[-1]
+    results["full_shell"] = {
+        "strain_energy": last["strain_energy"],
+        "coiled_length": last["coiled_length"],
+        "outer_radius": last["outer_radius"],
+        "coiling_tension_outer": _band_mean(
+            [r["hub_angle"] for r in coiling],
+            [r["coiling_tension_outer"] if r["coiling_tension_outer"] != "" else None for r in coiling],
+            TENSION_FROM,
+        ),
+        "dofs": global_size(model.model.W),
+        "steps": len(coiling),
+        "newton_iterations": sum(int(r["newton_iterations"]) for r in rows),
+        "wall_time": full_wall,
+    }
+    model.solver.destroy()
+    results["pull"] = pull
+    return results
+
+
+def hybrid_coil(config: Config, preset: str = "coarse", angle: float = COIL_ANGLE, comm=MPI.COMM_WORLD):
+    """``hybrid-coil``: :func:`coil_side_by_side` to ``angle`` [rad]: the hybrid's stored strain
+    energy within 0.5 % of the full shell's and its coiled length (the lift-off's place along
+    the tape) within 2 %; the outer coil radius, DOFs, steps and wall times in the info."""
+    both = coil_side_by_side(config, preset, angle, comm)
+    hybrid, full = both["hybrid"], both["full_shell"]
+    return CaseResult(
+        "hybrid-coil",
+        [
+            Check(
+                "strain energy, hybrid / full shell",
+                hybrid["strain_energy"] / full["strain_energy"],
+                1.0,
+                5e-3,
+            ),
+            Check(
+                "coiled length, hybrid / full shell",
+                hybrid["coiled_length"] / full["coiled_length"],
+                1.0,
+                0.02,
+            ),
+        ],
+        {"hub_angle": angle, **both},
     )

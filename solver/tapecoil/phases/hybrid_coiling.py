@@ -1,0 +1,522 @@
+"""Quasi-static coiling with the shell-beam hybrid: shell around the ploy region, beam elsewhere.
+
+The tape is shell only on a window around the ploy region (:class:`WindowOnHub`), the
+geometrically exact beam elsewhere (:mod:`tapecoil.models.tape_beam`), the two tied as rigid
+sections (:class:`~tapecoil.models.hybrid_problem.HybridProblem`):
+
+- At the start the window is the root's: the root is attached to the hub and flattened onto it
+  as in the full shell's coiling (:mod:`tapecoil.phases.coiling`), the beam of the arc section
+  runs beyond the window, tied to its far edge as the arc, its end on the guide line and pulled
+  by T (``coiling.tension``).
+- The hub turns and the lift-off point, where the tape leaves the coil, travels along the
+  material. Once it is ``WindowSettings.move`` further on, the window moves with it
+  (:func:`~tapecoil.models.window.carry_over`): the coiled shell behind becomes a beam of the
+  flattened strip's section (fitted to the shell's sections; the coil's free edges' relief in
+  its energy), clamped to the hub at the root and kept off the hub and the turns beneath by the
+  same spiral obstacle as the shell (``contact.turns = "spiral"``, its line a half thickness
+  above the face that touches); it is tied flat to the window. The beam ahead becomes shell.
+- Each point's winding angle, which places it on the spiral, is carried over by unwrapping the
+  polar angle along the tape from the root.
+
+The window holds ``behind`` of coil and ``ahead`` of tape beyond the lift-off: the ploy region,
+where the section goes from flat to the arc, lies there (docs/hybrid.md gives the
+measurements behind the defaults). Once the window reaches the free end it stays there, the
+free end's guide and pull on the shell.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from tapecoil.config import Config
+from tapecoil.core.dofs import assemble_into, global_scalar, owned_subspace_dofs
+from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
+from tapecoil.geometry.sections import CircularArcSection
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.hub.attachment import HubRoot
+from tapecoil.hub.contact import CoilContact, default_penalty, spiral_obstacle
+from tapecoil.hub.frame import HubFrame
+from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_station
+from tapecoil.measures.section_forces import SectionForces
+from tapecoil.models.beam_section import BeamSection
+from tapecoil.models.edges import facet_condition
+from tapecoil.models.hybrid_problem import HybridProblem
+from tapecoil.models.materials import shell_material
+from tapecoil.models.nodes import Nodes
+from tapecoil.models.problem import ShellProblem
+from tapecoil.models.tape_beam import tape_beam
+from tapecoil.models.window import carry_over
+from tapecoil.phases.coiling_run import CoilingRun
+from tapecoil.phases.predictors import AlongTape, choose_predictor, turn_wound, wound_length
+
+__all__ = ["HybridCoiling", "WindowOnHub", "WindowSettings"]
+
+# the free end's guide (as the full shell's coiling): displacement across and normal to the line
+# and the end's rotations held
+_GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
+# the step grows after steps of at most this many Newton iterations (the full shell's coiling's)
+EASY_ITERATIONS = 8
+
+
+@dataclass(frozen=True)
+class WindowSettings:
+    """Where the hybrid's shell window lies in coiling.
+
+    Attributes:
+        ahead: shell beyond the lift-off point [m] (the ploy region and a margin).
+        behind: shell on the coil behind the lift-off point [m] (the flat tie's place).
+        move: how far the lift-off travels before the window moves with it [m] (rounded up to
+            whole elements).
+        tie_penalty: the ties' penalty factor (:class:`~tapecoil.models.interface.RigidSectionTie`).
+    """
+
+    ahead: float = 0.15
+    behind: float = 0.025
+    move: float = 0.025
+    tie_penalty: float = 1e2
+
+
+@dataclass
+class ContactSettings:
+    """The hub's and the turns' contact, the shell's and the beam's alike (as :class:`TapeOnHub`'s)."""
+
+    penalty: float  # [N/m^3] per unit area of the shell
+    max_turns: int
+    ramp_width: float  # [rad]
+    smoothing: float  # [m]
+
+
+class WindowOnHub(ShellProblem):
+    """The hybrid's shell window from ``start`` [m] along the tape, ``length`` [m] long, on the
+    hub of ``frame``: the contact of its face with the hub and the turns beneath
+    (:class:`CoilContact`, the spiral), the root attached to the hub when the window starts at
+    the root, the free end's guide and pull ``tension`` [N] when it ends at the free end.
+
+    The load parameter is the hub angle [rad], or the root's flattening while ``flattening``.
+    """
+
+    def __init__(
+        self,
+        config: Config,
+        start: float,
+        length: float,
+        element: float,
+        frame: HubFrame,
+        contact: ContactSettings,
+        *,
+        shift: bool = False,
+        comm=MPI.COMM_WORLD,
+        name: str = "window",
+    ):
+        tp = config.tape
+        across = MeshResolution.from_config(config.mesh, tp.L).across
+        super().__init__(
+            StripGeometry(tp.R, tp.b, length, start=start),
+            MeshResolution(across, max(1, round(length / element))),
+            shell_material(config),
+            comm=comm,
+            name=name,
+            director_frame="global",
+        )
+        model = self.model
+        self.frame = frame
+        self.contact = CoilContact(
+            model, frame, contact.penalty, contact.max_turns, contact.ramp_width, contact.smoothing, "spiral"
+        )
+        self.flattening = False
+        self._along = AlongTape(self.contact.nodes, comm) if shift else None
+        self.root = None
+        if start <= 1e-9 * tp.L:
+            self.root = HubRoot(model, ROOT, frame, CircularArcSection.from_tape(tp))
+            self.bcs += self.root.bcs
+            self.contact.reset()
+        energy = model.strain_energy + self.contact.energy
+        if start + length >= tp.L * (1 - 1e-9):
+            free_end = self.strip.facet_tags.find(FREE_END)
+            self.bcs += [facet_condition(model, sub, free_end)[1] for sub in _GUIDE_COMPONENTS]
+            # T spread evenly over the free end's arc, as the full shell's pull
+            energy = energy - config.coiling.tension * model.u[0] / tp.b * model.ds(FREE_END)
+        self._energy = energy
+
+    def forms(self) -> tuple:
+        F = ufl.derivative(self._energy, self.model.q, self.model.dq)
+        return F, self.model.jacobian_form(F)
+
+    def set_load(self, value: float) -> None:
+        super().set_load(value)
+        if self.flattening:
+            self.root.set(value, 0.0)
+            return
+        if self.root is not None:
+            self.root.set(1.0, value)
+        self.contact.turn(value)
+
+    def commit(self, load: float) -> None:
+        if not self.flattening:
+            self.contact.update(load)
+
+    def predict(self, load_from: float, load_to: float) -> None:
+        """The material already on the coil turns with the hub, as the beam's does; with
+        ``shift``, the rest takes the state of the material the wound length behind it, as the
+        full shell's coiling predicts (:class:`~tapecoil.phases.predictors.CoilingPredictor`),
+        where that material is in the window."""
+        if self.flattening:
+            return
+        q = self.model.q.x.array
+        current = q.copy()
+        c = self.contact
+        nodes = c.nodes
+        if self._along is not None:
+            ds = wound_length(c, load_from, load_to)
+            shifted = self._along.values_at(current, -ds)
+            start = self.surface.xi_range[0][0]
+            inside = nodes.xi[0] - ds >= start - 1e-9 * (1.0 + start)
+            q[nodes.u_dofs[inside]] = shifted[inside, :3] - np.array([ds, 0.0, 0.0])
+            q[nodes.theta_dofs[inside]] = shifted[inside, 3:]
+        turn_wound(q, current, nodes, c.psi.x.array, self.frame, load_from, load_to - load_from)
+
+
+def _shell_root_force(shell: WindowOnHub) -> np.ndarray:
+    """The internal force [N] on the window's root edge, dE/du summed over its dofs (collective)."""
+    model = shell.model
+    if getattr(shell, "_root_form", None) is None:
+        shell._root_form = dolfinx.fem.form(ufl.derivative(shell._energy, model.q, model.dq))
+        shell._root_vector = dolfinx.fem.Function(model.W)
+        facets = shell.strip.facet_tags.find(ROOT)
+        shell._root_dofs = [owned_subspace_dofs(model.W, (0, i), 1, facets) for i in range(3)]
+    f = assemble_into(shell._root_vector, shell._root_form)
+    local = np.array([f[dofs].sum() for dofs in shell._root_dofs])
+    return shell.strip.mesh.comm.allreduce(local, op=MPI.SUM)
+
+
+def _gathered(comm, *arrays) -> list[np.ndarray]:
+    return [np.concatenate(comm.allgather(np.ascontiguousarray(a))) for a in arrays]
+
+
+def centre_line(hybrid) -> tuple[np.ndarray, np.ndarray]:
+    """The tape's line along its length: reference coordinates x [m] (sorted) and current points
+    (n, 3) [m], from the beam's nodes and the shell's nodes on its middle line, gathered on every
+    rank (collective)."""
+    comm = hybrid.shell.strip.mesh.comm
+    beam = hybrid.beam.model
+    nodes = Nodes(hybrid.shell.model)
+    middle = np.abs(nodes.xi[1]) < 1e-9 * hybrid.shell.surface.xi_range[1][1]
+    x_shell = nodes.xi[0, middle]
+    p_shell = nodes.positions(hybrid.shell.model.q.x.array)[:, middle].T
+    x_beam = beam.node_points[:, 0]
+    p_beam = beam.node_points + beam.q.x.array[beam.node_u_dofs]
+    x, points = _gathered(comm, np.concatenate([x_shell, x_beam]), np.vstack([p_shell, p_beam]))
+    order = np.argsort(x, kind="stable")
+    x, points = x[order], points[order]
+    keep = np.concatenate([[True], np.diff(x) > 1e-12])  # a node shared by ranks, once
+    return x[keep], points[keep]
+
+
+def winding_along(frame: HubFrame, angle: float, points: np.ndarray) -> np.ndarray:
+    """The winding angles [rad] of points (n, 3) along the tape from its root at hub angle
+    ``angle``: the hub angle less each point's swept angle, unwrapped along the tape from the
+    root's, 0 (successive points less than half a turn apart)."""
+    raw = angle - frame.polar(points.T)[1]
+    psi = np.unwrap(raw)
+    return psi - 2 * math.pi * np.round(psi[0] / (2 * math.pi))
+
+
+@dataclass
+class CoilingRecord:
+    """A converged step of the hybrid's coiling: the hub angle [rad], the window (start, end)
+    [m] along the tape, the lift-off's place along it [m], the strain energy [J], the step's
+    Newton iterations and the wall time since the run began [s]."""
+
+    hub_angle: float
+    window: tuple[float, float]
+    lift_off: float
+    strain_energy: float
+    iterations: int
+    wall_time: float
+
+
+class HybridCoiling:
+    """The coiling of ``config``'s tape with the hybrid model (see the module): :meth:`flatten`,
+    then :meth:`coil` to a hub angle; ``records`` holds a row per converged step and ``moves``
+    the window's places, (hub angle, start, end). Hub-angle steps from ``first_step`` up to
+    ``max_step`` [rad] (by default the full shell's coiling's: ``coiling.max_step``, else its
+    predictor's)."""
+
+    def __init__(
+        self,
+        config: Config,
+        comm=MPI.COMM_WORLD,
+        window: WindowSettings | None = None,
+        first_step: float = 0.1,
+        max_step: float | None = None,
+    ):
+        self.config, self.comm = config, comm
+        self.window = window or WindowSettings()
+        self.first_step, self.max_step = first_step, max_step
+        config = self.config
+        tp, cc = config.tape, config.contact
+        if config.coiling.sense != "opposite":
+            raise ValueError("the hybrid coils in the opposite sense only: coiling.sense must be 'opposite'")
+        if cc.turns != "spiral":
+            raise ValueError("the hybrid's beam rests on the spiral of turns: contact.turns must be 'spiral'")
+        resolution = MeshResolution.from_config(config.mesh, tp.L)
+        if resolution.grading != 1.0:
+            raise ValueError("the hybrid's shell and beam share their nodes: mesh.grading must be 1")
+        self.element = tp.L / resolution.along
+        self.window_length = self.element * math.ceil((self.window.ahead + self.window.behind) / self.element)
+        if self.window_length >= tp.L:
+            raise ValueError(
+                f"the hybrid's window ({self.window_length:g} m) must be shorter than the tape "
+                f"(tape.L = {tp.L:g} m)"
+            )
+        self.move = self.element * max(1, math.ceil(self.window.move / self.element - 1e-9))
+        self.predictor = choose_predictor(config.coiling.predictor, self.element, config.hub.radius)
+        # the full shell's largest steps for its predictor, unless coiling.max_step sets one
+        self.max_step = self.max_step or config.coiling.max_step or CoilingRun.max_steps[self.predictor]
+        self.frame = HubFrame(config.hub.radius, tp.h, config.coiling.sense)
+        self.centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
+        penalty = cc.penalty or cc.penalty_scale * default_penalty(
+            config.wall.axial_modulus, tp.h, self.element
+        )
+        self.contact = ContactSettings(
+            penalty,
+            math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1,
+            max(2 * self.element / config.hub.radius, 0.3),
+            cc.smoothing * tp.h,
+        )
+        self.angle = 0.0
+        self.records: list[CoilingRecord] = []
+        self.moves: list[tuple[float, float, float]] = []
+        self.hybrid = self._build(0.0)
+        self.moves.append((0.0, *self._ends(0.0)))
+        self._next_step = self.first_step
+        self._count = 0
+
+    def _ends(self, start: float) -> tuple[float, float]:
+        return start, min(start + self.window_length, self.config.tape.L)
+
+    def _build(self, start: float) -> HybridProblem:
+        config, frame, tp = self.config, self.frame, self.config.tape
+        start, end = self._ends(start)
+        name = f"hybrid_coil{len(self.moves)}"
+        shell = WindowOnHub(
+            config,
+            start,
+            end - start,
+            self.element,
+            frame,
+            self.contact,
+            shift=self.predictor == "shift",
+            comm=self.comm,
+            name=f"{name}_shell",
+        )
+        spans = ([(0.0, start)] if start > 0 else []) + ([(end, tp.L)] if end < tp.L else [])
+        beam = tape_beam(
+            config,
+            spans,
+            self.element,
+            flat_before=start,
+            edge_relief=True,
+            comm=self.comm,
+            name=f"{name}_beam",
+        )
+        ties = []
+        if start > 0:
+            # the root on the hub: the flattened strip's line lies on the hub's top generator
+            beam.clamp((0.0, 0.0, self.centroid), turning_about=(frame.axis_point, frame.axis), at=(0, 0, 0))
+            c = self.contact
+            beam.winding_contact(
+                frame.axis_point,
+                frame.axis,
+                -frame.axis_point,
+                lambda psi: spiral_obstacle(psi, frame.radius, tp.h, c.max_turns, c.ramp_width) + tp.h / 2,
+                c.penalty * tp.b,
+                c.smoothing,
+            )
+            ties.append(("xi1_min", (start, 0.0, self.centroid), "flat"))
+        if end < tp.L:
+            tip = (tp.L, 0.0, self.centroid)
+            beam.hold(tip, (1, 2), rotation=True)
+            beam.end_load(tip, force=(config.coiling.tension, 0.0, 0.0), constant=True)
+            ties.append(("xi1_max", (end, 0.0, self.centroid), "arc"))
+            if self.predictor == "shift":
+                # the straight part beyond the window runs towards the hub as the tape winds on
+                beam.slide(end - 1e-9 * tp.L, lambda a, b: wound_length(shell.contact, a, b))
+        return HybridProblem(shell, beam, ties=ties, modulus=tp.E, penalty=self.window.tie_penalty, name=name)
+
+    # -- measures ------------------------------------------------------------------------------
+    def strain_energy(self) -> float:
+        """The strain energy of shell and beam [J] (the ties' penalty energy apart; collective)."""
+        h = self.hybrid
+        if getattr(h, "_strain_form", None) is None:
+            h._strain_form = dolfinx.fem.form(h.shell.model.strain_energy)
+        return global_scalar(h._strain_form, self.comm) + h.beam.model.strain_energy()
+
+    def coil_geometry(self) -> dict[str, float]:
+        """The coiled length [m], the material behind the lift-off (the point wound by the hub
+        angle), and the outer coil radius [m], that of the outer face half a turn behind it, as
+        the full shell's (:func:`~tapecoil.phases.centre_line.coil_geometry`; collective)."""
+        x, points = centre_line(self.hybrid)
+        psi = np.maximum.accumulate(winding_along(self.frame, self.angle, points))
+        radius = self.frame.polar(points.T)[0]
+        probe = self.angle - math.pi if self.angle > math.pi else self.angle
+        return {
+            "coiled_length": float(np.interp(self.angle, psi, x)),
+            "outer_radius": float(np.interp(probe, psi, radius)) + 0.5 * self.config.tape.h,
+        }
+
+    def lift_off(self) -> float:
+        """Where along the tape [m] it leaves the coil: the coiled length (collective)."""
+        return self.coil_geometry()["coiled_length"]
+
+    def root_tension(self) -> float:
+        """The axial force N [N] the tape carries into its root on the hub (tension positive): the
+        beam's internal force at its clamped root along the tape's direction there, turned with
+        the hub (as the full shell's :meth:`CoilingModel.edge_forces`), or the window's when it
+        holds the root (collective). T - N is the coiling tension of the first turn."""
+        h = self.hybrid
+        if h.shell.root is not None:
+            f = _shell_root_force(h.shell)
+        else:
+            f = h.beam.internal_force((0.0, 0.0, self.centroid))
+        return -float(f @ self.frame.tangent(self.angle))
+
+    def outer_turn_tension(self) -> dict | None:
+        """The coiling tension T - N of the turn being wound, N read across the section at the
+        full shell's station (:func:`~tapecoil.measures.payout.outer_station`, 1 to 3 rad behind
+        the lift-off, clear of the climb over the root): from the window's strain energy
+        (:class:`~tapecoil.measures.section_forces.SectionForces`) where the station lies in the
+        window, else from the beam's axial force there; with the station's winding behind the
+        lift-off [rad] and its distance from the axis [m]. None before the coil has a station
+        (collective)."""
+        if self.angle < OUTER_STATION[0] + STATION_MARGIN:
+            return None
+        h = self.hybrid
+        x, points = centre_line(h)
+        psi = np.maximum.accumulate(winding_along(self.frame, self.angle, points))
+        behind = outer_station(self.angle)
+        station = float(np.interp(self.angle - behind, psi, x))
+        start, end = h.shell.surface.xi_range[0]
+        if start < station < end:
+            if getattr(h, "_sections", None) is None:
+                h._sections = SectionForces(h.shell.model, Nodes(h.shell.model), self.comm)
+            forces = h._sections()
+            k = int(np.argmin(np.abs(forces["xi1"] - station)))
+            where, N = float(forces["xi1"][k]), float(forces["axial_force"][k])
+        else:
+            points_q, N_q = h.beam.axial_force()
+            k = int(np.argmin(np.abs(points_q[:, 0] - station)))
+            where, N = float(points_q[k, 0]), float(N_q[k])
+        radius = float(
+            self.frame.polar(np.array([np.interp(where, x, points[:, i]) for i in range(3)])[:, None])[0][0]
+        )
+        return {
+            "station_winding": behind,
+            "outer_turn_radius": radius,
+            "coiling_tension_outer": self.config.coiling.tension - N,
+        }
+
+    def wrap_axial_force(self) -> tuple[float, float]:
+        """The axial force N [N] of the flattened beam on the first turn, mean and spread (max -
+        min) over its quadrature points short of the turn's climb over the root and of the
+        window (collective; nan while the window holds the root). With frictionless contact N is
+        uniform there, and T - N is the coiling tension of the first turn; a coarse beam on the
+        hub scatters it from point to point (the contact's line load between its nodes)."""
+        start = self.hybrid.shell.surface.xi_range[0][0]
+        rho = self.config.hub.radius + self.config.tape.h / 2
+        first_turn = rho * (2 * math.pi - self.contact.ramp_width)
+        x, N = self.hybrid.beam.axial_force()
+        pick = x[:, 0] < min(start, first_turn)
+        if not pick.any():
+            return math.nan, math.nan
+        return float(N[pick].mean()), float(np.ptp(N[pick]))
+
+    # -- stepping -------------------------------------------------------------------------------
+    def _record(self, step) -> None:
+        self._count += 1
+        self.angle = float(step.load)
+        self._next_step = float(step.next_step or step.step)
+        self.records.append(
+            CoilingRecord(
+                self.angle,
+                self._ends(self.hybrid.shell.surface.xi_range[0][0]),
+                self.lift_off(),
+                self.strain_energy(),
+                int(step.iterations),
+                time.perf_counter() - self._t0,
+            )
+        )
+
+    def flatten(self) -> None:
+        """Flatten the root onto the hub (``coiling.flatten_steps`` steps), the pull held."""
+        self._t0 = time.perf_counter()
+        h = self.hybrid
+        steps = self.config.coiling.flatten_steps
+        h.shell.flattening = True
+        h.solve(1.0, first_step=1.0 / steps, max_step=1.0 / steps, solver_config=self.config.solver)
+        h.shell.flattening = False
+        h.beam.committed_load = 0.0
+        h._set_load(0.0)
+
+    def coil(self, final_angle: float, on_step=None) -> None:
+        """Turn the hub from where it is to ``final_angle`` [rad], the window moved with the
+        lift-off; ``on_step(record)`` after each converged step."""
+        if not hasattr(self, "_t0"):
+            self._t0 = time.perf_counter()
+        tp = self.config.tape
+        rho = self.config.hub.radius + tp.h / 2
+        bending = self.config.wall.bending
+        while self.angle < final_angle - 1e-12:
+            # moved before a solve, never after: the state a call leaves is a converged one
+            self._move_window()
+            target = min(final_angle, self.angle + self.move / rho)
+            span = target - self.angle
+            first = min(self._next_step, span)
+
+            def record(step):
+                self._record(step)
+                if on_step is not None:
+                    on_step(self.records[-1])
+
+            self.hybrid.solve(
+                target,
+                first_step=first,
+                max_step=min(self.max_step, span),
+                min_step=1e-6,
+                relaxation=10 * bending.D11 / self.element**4,
+                on_step=record,
+                solver_config=self.config.solver,
+                easy_iterations=EASY_ITERATIONS,
+            )
+            self.angle = target
+
+    def _move_window(self) -> None:
+        tp = self.config.tape
+        start, end = self._ends(self.hybrid.shell.surface.xi_range[0][0])
+        if end >= tp.L:
+            return  # at the free end: the window stays
+        lift = self.lift_off()
+        wanted = self.element * math.floor((lift - self.window.behind) / self.element + 1e-9)
+        if wanted < start + self.move - 1e-9 * tp.L:
+            return
+        new_start = min(wanted, tp.L - self.window_length)
+        if new_start <= start:
+            return
+        old = self.hybrid
+        x, points = centre_line(old)
+        psi = winding_along(self.frame, self.angle, points)
+        new = self._build(new_start)
+        carry_over(old, new)
+        new.beam.set_winding(lambda s: np.interp(s, x, psi))
+        contact = new.shell.contact
+        contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
+        contact.update(self.angle)
+        self.hybrid = new
+        self.moves.append((self.angle, *self._ends(new_start)))
