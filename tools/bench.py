@@ -11,6 +11,11 @@ results/bench-deploy-*; the same figures.
 --case payout: a driven hub paying the tape out of the same stowed state to lambda = 0.9 with
 the pull held, into results/bench-payout-*; the same figures and the largest error of each of
 its measures over the bands of lambda.
+--case hybrid-coil: the benchmark coiling (flattening, then 36 rad) by the shell-beam hybrid and
+by the full shell, one after the other in this session: each one's stored energy, coiled length,
+outer coil radius, outer turn's coiling tension (mean from 6 rad on), DOFs, steps, Newton
+iterations and wall time, and the hybrid's against the full shell's. The coiling alone: the
+hybrid does not deploy yet.
 Run under mpirun for parallel figures: `make bench CASE=coil MESH=default NP=2`.
 """
 
@@ -30,9 +35,37 @@ parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
 parser.add_argument("--angle", type=float, default=1.0, help="final end rotation [rad]")
 parser.add_argument("--json", action="store_true")
-parser.add_argument("--case", default="fold", choices=("fold", "coil", "deploy", "payout"))
+parser.add_argument("--case", default="fold", choices=("fold", "coil", "deploy", "payout", "hybrid-coil"))
 args = parser.parse_args()
 machine = f"{platform.machine()}, {platform.processor() or 'cpu'}, {MPI.COMM_WORLD.size} rank(s)"
+
+if args.case == "hybrid-coil":
+    import dataclasses
+
+    from tapecoil.verification.hybrid import coil_side_by_side
+
+    config = load_config()
+    both = coil_side_by_side(config, args.mesh, config.coiling.hub_angle)
+    if MPI.COMM_WORLD.rank == 0:
+        print(f"case: coiling, flattening + {config.coiling.hub_angle:g} rad, hybrid and full shell")
+        print(f"mesh: {args.mesh}; machine: {machine}")
+        print(f"{'':<28} {'hybrid':>12} {'full shell':>12} {'hybrid / full':>14}")
+        for key in both["hybrid"]:
+            a, b = both["hybrid"][key], both["full_shell"][key]
+            ratio = a / b if (a is not None and b) else None
+            cells = [f"{v:>12.6g}" if v is not None else f"{'-':>12}" for v in (a, b)]
+            print(
+                f"{key:<28} {cells[0]} {cells[1]} {ratio:>14.5f}"
+                if ratio is not None
+                else f"{key:<28} {cells[0]} {cells[1]}"
+            )
+        print(
+            "windows (hub angle, start, end):",
+            ", ".join(f"({a:.2f}, {s:.4f}, {e:.4f})" for a, s, e in both["windows"]),
+        )
+        if args.json:
+            print(json.dumps(both, indent=2))
+    raise SystemExit(0)
 
 if args.case in ("coil", "deploy", "payout"):
     import dataclasses
