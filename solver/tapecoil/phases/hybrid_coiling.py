@@ -394,8 +394,8 @@ class HybridCoiling:
         the lift-off, clear of the climb over the root): from the window's strain energy
         (:class:`~tapecoil.measures.section_forces.SectionForces`) where the station lies in the
         window, else from the beam's axial force there; with the station's winding behind the
-        lift-off [rad] and its distance from the axis [m]. None before the coil has a station
-        (collective)."""
+        lift-off [rad], its place along the tape [m] and its distance from the axis [m]. None
+        before the coil has a station (collective)."""
         if self.angle < OUTER_STATION[0] + STATION_MARGIN:
             return None
         h = self.hybrid
@@ -418,6 +418,7 @@ class HybridCoiling:
             self.frame.polar(np.array([np.interp(where, x, points[:, i]) for i in range(3)])[:, None])[0][0]
         )
         return {
+            "station": where,
             "station_winding": behind,
             "outer_turn_radius": radius,
             "coiling_tension_outer": self.config.coiling.tension - N,
