@@ -91,14 +91,19 @@ class BeamProblem:
         point = np.asarray(point, dtype=float)
         self._turning.append((None, theta_values, point, None, a / np.linalg.norm(a), point))
 
-    def hold(self, point, components: tuple[int, ...], rotation: bool = False) -> None:
+    def hold(self, point, components: tuple[int, ...], rotation: bool | tuple[int, ...] = False) -> None:
         """Hold the displacement components ``components`` (0, 1, 2: x, y, z) of the node at
-        ``point`` at zero (a guide the node slides along) and, with ``rotation``, its rotation."""
+        ``point`` at zero (a guide the node slides along) and, with ``rotation``, its rotation:
+        True all of it, a tuple of axes (0, 1, 2: x, y, z) its turning about those alone (the
+        node then turns about the others' complement, a fixed axis)."""
         vertices = self._vertices(point)
         for i in components:
             self._dirichlet((0, i), vertices)
-        if rotation:
+        if rotation is True:
             self._dirichlet((1,), vertices)
+        elif rotation:
+            for i in rotation:
+                self._dirichlet((1, i), vertices)
 
     def end_load(self, point, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0), *, constant=False) -> None:
         """A force [N] and a moment [N m] on the node at ``point``, per unit load parameter (or,
