@@ -281,6 +281,14 @@ class HybridCoiling:
         # the full shell's largest steps for its predictor, unless coiling.max_step sets one
         self.max_step = self.max_step or config.coiling.max_step or CoilingRun.max_steps[self.predictor]
         self.frame = HubFrame(config.hub.radius, tp.h, config.coiling.sense)
+        # the joint Jacobian is a Hessian (the energies, the ties', dead loads, penalty contact)
+        # and the boundary conditions keep it symmetric: MUMPS LDL^T, as the full shell's
+        # coiling; [solver] and [coiling] petsc_options override it
+        self.petsc_options = {
+            "pc_type": "cholesky",
+            **config.solver.petsc_options,
+            **config.coiling.petsc_options,
+        }
         self.centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
         penalty = cc.penalty or cc.penalty_scale * default_penalty(
             config.wall.axial_modulus, tp.h, self.element
@@ -465,7 +473,13 @@ class HybridCoiling:
         h = self.hybrid
         steps = self.config.coiling.flatten_steps
         h.shell.flattening = True
-        h.solve(1.0, first_step=1.0 / steps, max_step=1.0 / steps, solver_config=self.config.solver)
+        h.solve(
+            1.0,
+            first_step=1.0 / steps,
+            max_step=1.0 / steps,
+            solver_config=self.config.solver,
+            options=self.petsc_options,
+        )
         h.shell.flattening = False
         h.beam.committed_load = 0.0
         h._set_load(0.0)
@@ -498,6 +512,7 @@ class HybridCoiling:
                 relaxation=10 * bending.D11 / self.element**4,
                 on_step=record,
                 solver_config=self.config.solver,
+                options=self.petsc_options,
                 easy_iterations=EASY_ITERATIONS,
             )
             self.angle = target
