@@ -247,7 +247,9 @@ class HybridCoiling:
     then :meth:`coil` to a hub angle; ``records`` holds a row per converged step and ``moves``
     the window's places, (hub angle, start, end). Hub-angle steps from ``first_step`` up to
     ``max_step`` [rad] (by default the full shell's coiling's: ``coiling.max_step``, else its
-    predictor's)."""
+    predictor's). Each window's joint solver reads PETSc options under the prefix
+    ``hybrid_coil<k>_``, k the window's number from 0; ``solver.petsc_options`` and
+    ``coiling.petsc_options`` reach all of them."""
 
     def __init__(
         self,
