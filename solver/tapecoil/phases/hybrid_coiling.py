@@ -144,6 +144,7 @@ class WindowOnHub(ShellProblem):
             # T spread evenly over the free end's arc, as the full shell's pull
             energy = energy - config.coiling.tension * model.u[0] / tp.b * model.ds(FREE_END)
         self._energy = energy
+        self._strain_form = self._root_form = None  # compiled when first read
 
     def forms(self) -> tuple:
         F = ufl.derivative(self._energy, self.model.q, self.model.dq)
@@ -161,6 +162,25 @@ class WindowOnHub(ShellProblem):
     def commit(self, load: float) -> None:
         if not self.flattening:
             self.contact.update(load)
+
+    def strain_energy(self) -> float:
+        """The window's strain energy [J] (collective)."""
+        if self._strain_form is None:
+            self._strain_form = dolfinx.fem.form(self.model.strain_energy)
+        return global_scalar(self._strain_form, self.strip.mesh.comm)
+
+    def root_force(self) -> np.ndarray:
+        """The internal force [N] on the window's root edge, dE/du summed over its dofs
+        (collective)."""
+        model = self.model
+        if self._root_form is None:
+            self._root_form = dolfinx.fem.form(ufl.derivative(self._energy, model.q, model.dq))
+            self._root_vector = dolfinx.fem.Function(model.W)
+            facets = self.strip.facet_tags.find(ROOT)
+            self._root_dofs = [owned_subspace_dofs(model.W, (0, i), 1, facets) for i in range(3)]
+        f = assemble_into(self._root_vector, self._root_form)
+        local = np.array([f[dofs].sum() for dofs in self._root_dofs])
+        return self.strip.mesh.comm.allreduce(local, op=MPI.SUM)
 
     def predict(self, load_from: float, load_to: float) -> None:
         """The material already on the coil turns with the hub, as the beam's does; with
@@ -181,19 +201,6 @@ class WindowOnHub(ShellProblem):
             q[nodes.u_dofs[inside]] = shifted[inside, :3] - np.array([ds, 0.0, 0.0])
             q[nodes.theta_dofs[inside]] = shifted[inside, 3:]
         turn_wound(q, current, nodes, c.psi.x.array, self.frame, load_from, load_to - load_from)
-
-
-def _shell_root_force(shell: WindowOnHub) -> np.ndarray:
-    """The internal force [N] on the window's root edge, dE/du summed over its dofs (collective)."""
-    model = shell.model
-    if getattr(shell, "_root_form", None) is None:
-        shell._root_form = dolfinx.fem.form(ufl.derivative(shell._energy, model.q, model.dq))
-        shell._root_vector = dolfinx.fem.Function(model.W)
-        facets = shell.strip.facet_tags.find(ROOT)
-        shell._root_dofs = [owned_subspace_dofs(model.W, (0, i), 1, facets) for i in range(3)]
-    f = assemble_into(shell._root_vector, shell._root_form)
-    local = np.array([f[dofs].sum() for dofs in shell._root_dofs])
-    return shell.strip.mesh.comm.allreduce(local, op=MPI.SUM)
 
 
 def _gathered(comm, *arrays) -> list[np.ndarray]:
@@ -307,7 +314,6 @@ class HybridCoiling:
         self.hybrid = self._build(0.0)
         self.moves.append((0.0, *self._ends(0.0)))
         self._next_step = self.first_step
-        self._count = 0
 
     def _ends(self, start: float) -> tuple[float, float]:
         return start, min(start + self.window_length, self.config.tape.L)
@@ -355,8 +361,8 @@ class HybridCoiling:
             tip = (tp.L, 0.0, self.centroid)
             # held in the plane of coiling, free to turn in it: the full shell's guide holds the
             # end's directors, but its reduced-integrated shear lets the end section pitch within
-            # the last element, and with the pitch held the hybrid's free part stood 0.7 mm higher
-            # (docs/hybrid.md, the free end)
+            # the last element; with the pitch held the hybrid's free part stood higher and its
+            # tape left the coil early (docs/hybrid.md, the free end)
             beam.hold(tip, (1, 2), rotation=(0, 2))
             beam.end_load(tip, force=(config.coiling.tension, 0.0, 0.0), constant=True)
             ties.append(("xi1_max", (end, 0.0, self.centroid), "arc"))
@@ -368,10 +374,7 @@ class HybridCoiling:
     # -- measures ------------------------------------------------------------------------------
     def strain_energy(self) -> float:
         """The strain energy of shell and beam [J] (the ties' penalty energy apart; collective)."""
-        h = self.hybrid
-        if getattr(h, "_strain_form", None) is None:
-            h._strain_form = dolfinx.fem.form(h.shell.model.strain_energy)
-        return global_scalar(h._strain_form, self.comm) + h.beam.model.strain_energy()
+        return self.hybrid.shell.strain_energy() + self.hybrid.beam.model.strain_energy()
 
     def coil_geometry(self) -> dict[str, float]:
         """The coiled length [m], the material behind the lift-off (the point wound by the hub
@@ -397,7 +400,7 @@ class HybridCoiling:
         holds the root (collective). T - N is the coiling tension of the first turn."""
         h = self.hybrid
         if h.shell.root is not None:
-            f = _shell_root_force(h.shell)
+            f = h.shell.root_force()
         else:
             f = h.beam.internal_force((0.0, 0.0, self.centroid))
         return -float(f @ self.frame.tangent(self.angle))
@@ -455,7 +458,6 @@ class HybridCoiling:
 
     # -- stepping -------------------------------------------------------------------------------
     def _record(self, step) -> None:
-        self._count += 1
         self.angle = float(step.load)
         self._next_step = float(step.next_step or step.step)
         self.records.append(
