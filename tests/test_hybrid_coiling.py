@@ -10,7 +10,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings, winding_along
 from tapecoil.verification import not_applicable
-from tapecoil.verification.hybrid import hybrid_coil
+from tapecoil.verification.hybrid_coil import hybrid_coil
 
 
 def coarse(angle: float) -> Config:

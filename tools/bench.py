@@ -42,7 +42,7 @@ machine = f"{platform.machine()}, {platform.processor() or 'cpu'}, {MPI.COMM_WOR
 if args.case == "hybrid-coil":
     import dataclasses
 
-    from tapecoil.verification.hybrid import coil_side_by_side
+    from tapecoil.verification.hybrid_coil import coil_side_by_side
 
     config = load_config()
     both = coil_side_by_side(config, args.mesh, config.coiling.hub_angle)

@@ -1,7 +1,7 @@
 """The coiling's cost against the tape's length, hybrid beside full shell: the benchmark tape's
 section and hub at length L [m] (argument), coiled until FREE [m] of it stays off the coil
 (the hub angle from the theory's spiral), by the hybrid and by the full shell one after the
-other (`tapecoil.verification.hybrid.coil_side_by_side`), on a mesh preset (second argument,
+other (`tapecoil.verification.hybrid_coil.coil_side_by_side`), on a mesh preset (second argument,
 default "default"). Prints the hub angle and, for both models, the stored energy, coiled
 length, outer radius, outer turn's coiling tension, free part's height, DOFs, steps, Newton
 iterations and wall time (docs/hybrid.md, "Cost against the tape's length").
@@ -16,7 +16,7 @@ from mpi4py import MPI
 
 from tapecoil import theory
 from tapecoil.config import Config
-from tapecoil.verification.hybrid import coil_side_by_side
+from tapecoil.verification.hybrid_coil import coil_side_by_side
 
 FREE = 0.031  # [m] the benchmark's 0.5 m at 36 rad leaves 31 mm off the coil
 

@@ -22,13 +22,8 @@ from tapecoil.verification.beam import (
     beam_turns,
 )
 from tapecoil.verification.checks import CaseResult
-from tapecoil.verification.hybrid import (
-    CANTILEVER_LENGTH,
-    hybrid_cantilever,
-    hybrid_coil,
-    hybrid_fold,
-    hybrid_window,
-)
+from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_fold, hybrid_window
+from tapecoil.verification.hybrid_coil import hybrid_coil
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
     ROLLUP_MESHES,
