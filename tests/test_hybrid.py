@@ -65,6 +65,52 @@ def test_tie_derivatives_agree_with_finite_differences():
         assert column == pytest.approx(hessian[:, i], rel=1e-5, abs=1e-3 * np.abs(hessian).max())
 
 
+def test_tie_mixed_derivatives_agree_with_finite_differences():
+    """d2E/(dq_shell dc_j), gathered as one matrix, against central differences in c_j of the
+    tie's residual on the shell (at a bent, turned state)."""
+    check_mixed_derivatives()
+
+
+@pytest.mark.mpi
+def test_tie_mixed_derivatives_on_two_ranks():
+    """As above on two ranks, each rank's rows of the shell's space."""
+    check_mixed_derivatives()
+
+
+def check_mixed_derivatives():
+    import dolfinx.fem.petsc
+    from petsc4py import PETSc
+
+    hybrid, _ = hybrid_cantilever_problem(Config(), coarse(), 0.1)
+    coupling = hybrid.ties["xi1_max"].coupling
+    shell_q = hybrid.shell.model.q
+    rng = np.random.default_rng(5)
+    shell_q.x.array[:] = 1e-4 * rng.standard_normal(len(shell_q.x.array))
+    shell_q.x.scatter_forward()
+    hybrid.ties["xi1_max"].turned.value[:] = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+    c0 = np.array([1e-3, -2e-3, 5e-4, 0.2, -0.1, 0.3])
+    coupling.c.value[:] = c0
+    mixed = [v.array_r.copy() for v in coupling.mixed_vectors()]
+    residual = dolfinx.fem.form(coupling.residual0)
+
+    def assembled():
+        b = dolfinx.fem.petsc.assemble_vector(residual)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return b.array_r.copy()
+
+    scale = max(np.abs(m).max() for m in mixed)
+    assert MPI.COMM_WORLD.allreduce(scale, op=MPI.MAX) > 0
+    for j in range(6):
+        step = 1e-6
+        coupling.c.value[:] = c0
+        coupling.c.value[j] += step
+        plus = assembled()
+        coupling.c.value[j] -= 2 * step
+        minus = assembled()
+        coupling.c.value[:] = c0
+        assert (plus - minus) / (2 * step) == pytest.approx(mixed[j], rel=1e-5, abs=1e-5 * scale)
+
+
 def test_hybrid_solve_cuts_back_and_keeps_its_last_state():
     """A turn in one step of a whole turn fails; the step is cut back and the run arrives."""
     hybrid, tip = hybrid_cantilever_problem(Config(), coarse(), 0.1)

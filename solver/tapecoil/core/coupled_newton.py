@@ -5,9 +5,9 @@ Two problems, each a residual form, its Jacobian, a state and Dirichlet conditio
 by MUMPS. They are joined by an energy E(q0, c) stated on the first problem's mesh, whose
 parameters c are a few dofs of the second problem's state (:class:`DofCoupling`: a shell's edge
 tied to a beam's end node, whose six dofs are c). E's derivatives in q0 join the first block's
-forms; its derivatives in c are assembled as n scalars, n vectors on the first space and an
-n x n matrix (UFL differentiates E with respect to c as a variable), and placed in the second
-block's rows and in the off-diagonal blocks. The joint matrix is a PETSc MATNEST of the four
+forms; its derivatives in c, an n-vector, n vectors on the first space and an n x n matrix
+(UFL differentiates E with respect to c as a variable), are placed in the second block's rows
+and in the off-diagonal blocks. The joint matrix is a PETSc MATNEST of the four
 blocks converted to AIJ, so that no form couples the two meshes and the same code serves
 DOLFINx 0.9 to 0.11 (whose block assembly differs).
 
@@ -90,23 +90,37 @@ class DofCoupling:
 
     def set_energy(self, density, measure, q0: dolfinx.fem.Function, cells) -> None:
         """E = integral of ``density`` (UFL, in q0 and :attr:`variable`) with ``measure``, whose
-        integration entities lie in the (local) ``cells`` of q0's mesh."""
+        integration entities lie in the (local) ``cells`` of q0's mesh.
+
+        E's derivatives in c are gathered by three forms, not one per entry: the gradient and the
+        Hessian tested with piecewise constant vectors and matrices, whose cell values summed over
+        the mesh are the entries, and the mixed derivatives as one matrix of those vectors'
+        rows against q0's space, summed over the cells by a product with its transpose. A tied
+        window is rebuilt at every move, and creating the forms dominated the rebuild (34 forms
+        per tie of six dofs, each hashed and looked up in the JIT cache)."""
         n = len(self.dofs)
         self.cells = np.asarray(cells, dtype=np.int32)
         V0 = q0.function_space
+        mesh = V0.mesh
         energy = density * measure
         self.residual0 = ufl.derivative(energy, q0, ufl.TestFunction(V0))
         self.jacobian0 = ufl.derivative(self.residual0, q0, ufl.TrialFunction(V0))
         gradient = ufl.diff(density, self.variable)
         hessian = ufl.diff(gradient, self.variable)
-        self._gradient = [dolfinx.fem.form(gradient[i] * measure) for i in range(n)]
-        self._mixed = [
-            dolfinx.fem.form(ufl.derivative(gradient[i] * measure, q0, ufl.TestFunction(V0)))
-            for i in range(n)
-        ]
-        self._hessian = {
-            (i, j): dolfinx.fem.form(hessian[i, j] * measure) for i in range(n) for j in range(i, n)
-        }
+        vectors = dolfinx.fem.functionspace(mesh, ("DG", 0, (n,)))
+        matrices = dolfinx.fem.functionspace(mesh, ("DG", 0, (n, n)))
+        tested = ufl.inner(gradient, ufl.TestFunction(vectors)) * measure
+        self._gradient = dolfinx.fem.form(tested)
+        self._hessian = dolfinx.fem.form(ufl.inner(hessian, ufl.TestFunction(matrices)) * measure)
+        self._mixed = dolfinx.fem.form(ufl.derivative(tested, q0, ufl.TrialFunction(V0)))
+        self._mixed_matrix = dolfinx.fem.petsc.create_matrix(self._mixed)
+        # e_j: ones at component j of every cell, so that M^T e_j sums the cells' rows of j
+        self._components = []
+        for j in range(n):
+            e = self._mixed_matrix.createVecLeft()
+            e.array[:] = 0.0
+            e.array[j::n] = 1.0
+            self._components.append(e)
         self.energy = dolfinx.fem.form(energy)
 
     def read(self) -> None:
@@ -118,25 +132,35 @@ class DofCoupling:
     def _scalar(self, form) -> float:
         return self.comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
 
+    def _summed(self, form, shape: tuple[int, ...]) -> np.ndarray:
+        """The cell values of the piecewise constant ``form`` summed over the mesh (collective)."""
+        b = dolfinx.fem.petsc.assemble_vector(form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        local = b.array_r.reshape(-1, *shape).sum(axis=0)
+        b.destroy()
+        return self.comm.allreduce(local, op=MPI.SUM)
+
     def gradient(self) -> np.ndarray:
         """dE/dc (n,), on every rank (collective)."""
-        return np.array([self._scalar(f) for f in self._gradient])
+        return self._summed(self._gradient, (len(self.dofs),))
 
     def hessian(self) -> np.ndarray:
         """d2E/dc2 (n, n), on every rank (collective)."""
         n = len(self.dofs)
-        H = np.zeros((n, n))
-        for (i, j), form in self._hessian.items():
-            H[i, j] = H[j, i] = self._scalar(form)
-        return H
+        H = self._summed(self._hessian, (n, n))
+        return 0.5 * (H + H.T)  # symmetric but for round-off
 
     def mixed_vectors(self) -> list:
-        """d2E/(dq0 dc_j) for each j: PETSc vectors of q0's layout, owners' values summed."""
+        """d2E/(dq0 dc_j) for each j: PETSc vectors of q0's owned layout (collective)."""
+        M = self._mixed_matrix
+        M.zeroEntries()
+        compat.assemble_matrix(M, self._mixed, [])
+        M.assemble()
         out = []
-        for form in self._mixed:
-            b = dolfinx.fem.petsc.assemble_vector(form)
-            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            out.append(b)
+        for e in self._components:
+            v = M.createVecRight()
+            M.multTranspose(e, v)
+            out.append(v)
         return out
 
 
