@@ -112,6 +112,8 @@ class DofCoupling:
         tested = ufl.inner(gradient, ufl.TestFunction(vectors)) * measure
         self._gradient = dolfinx.fem.form(tested)
         self._hessian = dolfinx.fem.form(ufl.inner(hessian, ufl.TestFunction(matrices)) * measure)
+        self._cell_values = {id(self._gradient): compat.create_vector(vectors)}
+        self._cell_values[id(self._hessian)] = compat.create_vector(matrices)
         self._mixed = dolfinx.fem.form(ufl.derivative(tested, q0, ufl.TrialFunction(V0)))
         self._mixed_matrix = dolfinx.fem.petsc.create_matrix(self._mixed)
         # e_j: ones at component j of every cell, so that M^T e_j sums the cells' rows of j
@@ -134,11 +136,12 @@ class DofCoupling:
 
     def _summed(self, form, shape: tuple[int, ...]) -> np.ndarray:
         """The cell values of the piecewise constant ``form`` summed over the mesh (collective)."""
-        b = dolfinx.fem.petsc.assemble_vector(form)
+        b = self._cell_values[id(form)]
+        with b.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(b, form)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        local = b.array_r.reshape(-1, *shape).sum(axis=0)
-        b.destroy()
-        return self.comm.allreduce(local, op=MPI.SUM)
+        return self.comm.allreduce(b.array_r.reshape(-1, *shape).sum(axis=0), op=MPI.SUM)
 
     def gradient(self) -> np.ndarray:
         """dE/dc (n,), on every rank (collective)."""
