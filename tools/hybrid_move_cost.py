@@ -4,7 +4,9 @@ window"): a 0.5 m cantilever of the benchmark section on the default mesh (9 ele
 force stepped by 0.05 N; the window moved on by 20 mm MOVES times, each move followed by one
 load step. Prints, per move, the time to build the moved hybrid (meshes, spaces, forms from the
 cache, ties), to carry the state over, and of the load step after it (its solver's set-up
-included), with its Newton iterations.
+included), with its Newton iterations; then what the ties' derivatives in the beam ends'
+dofs cost per evaluation (the gradient in each residual, the Hessian and the mixed derivatives in
+each Jacobian).
 
     tools/env.sh run [mpirun -n 2] env PYTHONPATH=solver python3 tools/hybrid_move_cost.py [MOVES]
 """
@@ -19,6 +21,7 @@ from tapecoil.models.window import carry_over
 from tapecoil.verification.hybrid import tape_hybrid
 
 LENGTH, ELEMENT, WINDOW, START, SHIFT, FORCE_STEP = 0.5, 0.004, 0.148, 0.048, 0.02, 0.05
+REPEAT = 50  # evaluations of the ties' derivatives timed
 moves = int(sys.argv[1]) if len(sys.argv) > 1 else 3
 
 
@@ -58,3 +61,18 @@ for k in range(1, moves + 1):
         f"the step after it {wall:.2f} s ({iterations} iterations)"
     )
     old = new
+
+# what the ties' derivatives in the beam ends' dofs cost in each Jacobian and residual
+coupling = old.coupling
+costs = []
+for derivative in (coupling.gradient, coupling.hessian, coupling.mixed_vectors):
+    derivative()
+    t0 = time.perf_counter()
+    for _ in range(REPEAT):
+        derivative()
+    costs.append(1e3 * (time.perf_counter() - t0) / REPEAT)
+gradient, hessian, mixed = costs
+report(
+    f"the ties' derivatives: gradient {gradient:.2f} ms, Hessian {hessian:.2f} ms, "
+    f"mixed {mixed:.2f} ms per evaluation"
+)
