@@ -96,8 +96,8 @@ class DofCoupling:
         Hessian tested with piecewise constant vectors and matrices, whose cell values summed over
         the mesh are the entries, and the mixed derivatives as one matrix of those vectors'
         rows against q0's space, summed over the cells by a product with its transpose. A tied
-        window is rebuilt at every move, and creating the forms dominated the rebuild (34 forms
-        per tie of six dofs, each hashed and looked up in the JIT cache)."""
+        window is rebuilt at every move, and creating a form per entry, each hashed and looked
+        up in the JIT cache, dominated the rebuild."""
         n = len(self.dofs)
         self.cells = np.asarray(cells, dtype=np.int32)
         V0 = q0.function_space
@@ -110,10 +110,12 @@ class DofCoupling:
         vectors = dolfinx.fem.functionspace(mesh, ("DG", 0, (n,)))
         matrices = dolfinx.fem.functionspace(mesh, ("DG", 0, (n, n)))
         tested = ufl.inner(gradient, ufl.TestFunction(vectors)) * measure
-        self._gradient = dolfinx.fem.form(tested)
-        self._hessian = dolfinx.fem.form(ufl.inner(hessian, ufl.TestFunction(matrices)) * measure)
-        self._cell_values = {id(self._gradient): compat.create_vector(vectors)}
-        self._cell_values[id(self._hessian)] = compat.create_vector(matrices)
+        # (form, the vector its cell values are assembled into)
+        self._gradient = (dolfinx.fem.form(tested), compat.create_vector(vectors))
+        self._hessian = (
+            dolfinx.fem.form(ufl.inner(hessian, ufl.TestFunction(matrices)) * measure),
+            compat.create_vector(matrices),
+        )
         self._mixed = dolfinx.fem.form(ufl.derivative(tested, q0, ufl.TrialFunction(V0)))
         self._mixed_matrix = dolfinx.fem.petsc.create_matrix(self._mixed)
         # e_j: ones at component j of every cell, so that M^T e_j sums the cells' rows of j
@@ -134,9 +136,10 @@ class DofCoupling:
     def _scalar(self, form) -> float:
         return self.comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
 
-    def _summed(self, form, shape: tuple[int, ...]) -> np.ndarray:
-        """The cell values of the piecewise constant ``form`` summed over the mesh (collective)."""
-        b = self._cell_values[id(form)]
+    def _summed(self, gathered: tuple, shape: tuple[int, ...]) -> np.ndarray:
+        """The cell values of a piecewise-constant form, ``gathered`` = (form, its vector), summed
+        over the mesh (collective)."""
+        form, b = gathered
         with b.localForm() as local:
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, form)
