@@ -8,7 +8,8 @@ import pytest
 from mpi4py import MPI
 
 from tapecoil.config import Config
-from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings, winding_along
+from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings
+from tapecoil.phases.hybrid_line import winding_along
 from tapecoil.verification import not_applicable
 from tapecoil.verification.hybrid_coil import hybrid_coil
 

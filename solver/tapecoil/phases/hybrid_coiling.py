@@ -1,6 +1,7 @@
 """Quasi-static coiling with the shell-beam hybrid: shell around the ploy region, beam elsewhere.
 
-The tape is shell only on a window around the ploy region (:class:`WindowOnHub`), the
+The tape is shell only on a window around the ploy region
+(:class:`~tapecoil.phases.window_on_hub.WindowOnHub`), the
 geometrically exact beam elsewhere (:mod:`tapecoil.models.tape_beam`), the two tied as rigid
 sections (:class:`~tapecoil.models.hybrid_problem.HybridProblem`):
 
@@ -30,37 +31,27 @@ import math
 import time
 from dataclasses import dataclass
 
-import dolfinx
 import numpy as np
-import ufl
 from mpi4py import MPI
 
 from tapecoil.config import Config
-from tapecoil.core.dofs import assemble_into, global_scalar, owned_subspace_dofs
-from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
-from tapecoil.geometry.sections import CircularArcSection
-from tapecoil.geometry.surfaces import StripGeometry
-from tapecoil.hub.attachment import HubRoot
-from tapecoil.hub.contact import CoilContact, default_penalty, spiral_obstacle
+from tapecoil.geometry.meshes import MeshResolution
+from tapecoil.hub.contact import default_penalty, spiral_obstacle
 from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_station
 from tapecoil.measures.section_forces import SectionForces
 from tapecoil.models.beam_section import BeamSection
-from tapecoil.models.edges import facet_condition
 from tapecoil.models.hybrid_problem import HybridProblem
-from tapecoil.models.materials import shell_material
 from tapecoil.models.nodes import Nodes
-from tapecoil.models.problem import ShellProblem
 from tapecoil.models.tape_beam import tape_beam
 from tapecoil.models.window import carry_over
 from tapecoil.phases.coiling_run import CoilingRun
-from tapecoil.phases.predictors import AlongTape, choose_predictor, turn_wound, wound_length
+from tapecoil.phases.hybrid_line import centre_line, winding_along
+from tapecoil.phases.predictors import choose_predictor, wound_length
+from tapecoil.phases.window_on_hub import ContactSettings, WindowOnHub
 
-__all__ = ["HybridCoiling", "WindowOnHub", "WindowSettings"]
+__all__ = ["HybridCoiling", "WindowSettings"]
 
-# the free end's guide (as the full shell's coiling): displacement across and normal to the line
-# and the end's rotations held
-_GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
 # the step grows after steps of at most this many Newton iterations (the full shell's coiling's)
 EASY_ITERATIONS = 8
 
@@ -81,158 +72,6 @@ class WindowSettings:
     behind: float = 0.025
     move: float = 0.025
     tie_penalty: float = 1e2
-
-
-@dataclass
-class ContactSettings:
-    """The hub's and the turns' contact, the shell's and the beam's alike (as :class:`TapeOnHub`'s)."""
-
-    penalty: float  # [N/m^3] per unit area of the shell
-    max_turns: int
-    ramp_width: float  # [rad]
-    smoothing: float  # [m]
-
-
-class WindowOnHub(ShellProblem):
-    """The hybrid's shell window from ``start`` [m] along the tape, ``length`` [m] long, on the
-    hub of ``frame``: the contact of its face with the hub and the turns beneath
-    (:class:`CoilContact`, the spiral), the root attached to the hub when the window starts at
-    the root, the free end's guide and pull ``tension`` [N] when it ends at the free end.
-
-    The load parameter is the hub angle [rad], or the root's flattening while ``flattening``.
-    """
-
-    def __init__(
-        self,
-        config: Config,
-        start: float,
-        length: float,
-        element: float,
-        frame: HubFrame,
-        contact: ContactSettings,
-        *,
-        shift: bool = False,
-        comm=MPI.COMM_WORLD,
-        name: str = "window",
-    ):
-        tp = config.tape
-        across = MeshResolution.from_config(config.mesh, tp.L).across
-        super().__init__(
-            StripGeometry(tp.R, tp.b, length, start=start),
-            MeshResolution(across, max(1, round(length / element))),
-            shell_material(config),
-            comm=comm,
-            name=name,
-            director_frame="global",
-        )
-        model = self.model
-        self.frame = frame
-        self.contact = CoilContact(
-            model, frame, contact.penalty, contact.max_turns, contact.ramp_width, contact.smoothing, "spiral"
-        )
-        self.flattening = False
-        self._along = AlongTape(self.contact.nodes, comm) if shift else None
-        self.root = None
-        if start <= 1e-9 * tp.L:
-            self.root = HubRoot(model, ROOT, frame, CircularArcSection.from_tape(tp))
-            self.bcs += self.root.bcs
-            self.contact.reset()
-        energy = model.strain_energy + self.contact.energy
-        if start + length >= tp.L * (1 - 1e-9):
-            free_end = self.strip.facet_tags.find(FREE_END)
-            self.bcs += [facet_condition(model, sub, free_end)[1] for sub in _GUIDE_COMPONENTS]
-            # T spread evenly over the free end's arc, as the full shell's pull
-            energy = energy - config.coiling.tension * model.u[0] / tp.b * model.ds(FREE_END)
-        self._energy = energy
-        self._strain_form = self._root_form = None  # compiled when first read
-
-    def forms(self) -> tuple:
-        F = ufl.derivative(self._energy, self.model.q, self.model.dq)
-        return F, self.model.jacobian_form(F)
-
-    def set_load(self, value: float) -> None:
-        super().set_load(value)
-        if self.flattening:
-            self.root.set(value, 0.0)
-            return
-        if self.root is not None:
-            self.root.set(1.0, value)
-        self.contact.turn(value)
-
-    def commit(self, load: float) -> None:
-        if not self.flattening:
-            self.contact.update(load)
-
-    def strain_energy(self) -> float:
-        """The window's strain energy [J] (collective)."""
-        if self._strain_form is None:
-            self._strain_form = dolfinx.fem.form(self.model.strain_energy)
-        return global_scalar(self._strain_form, self.strip.mesh.comm)
-
-    def root_force(self) -> np.ndarray:
-        """The internal force [N] on the window's root edge, dE/du summed over its dofs
-        (collective)."""
-        model = self.model
-        if self._root_form is None:
-            self._root_form = dolfinx.fem.form(ufl.derivative(self._energy, model.q, model.dq))
-            self._root_vector = dolfinx.fem.Function(model.W)
-            facets = self.strip.facet_tags.find(ROOT)
-            self._root_dofs = [owned_subspace_dofs(model.W, (0, i), 1, facets) for i in range(3)]
-        f = assemble_into(self._root_vector, self._root_form)
-        local = np.array([f[dofs].sum() for dofs in self._root_dofs])
-        return self.strip.mesh.comm.allreduce(local, op=MPI.SUM)
-
-    def predict(self, load_from: float, load_to: float) -> None:
-        """The material already on the coil turns with the hub, as the beam's does; with
-        ``shift``, the rest takes the state of the material the wound length behind it, as the
-        full shell's coiling predicts (:class:`~tapecoil.phases.predictors.CoilingPredictor`),
-        where that material is in the window."""
-        if self.flattening:
-            return
-        q = self.model.q.x.array
-        current = q.copy()
-        c = self.contact
-        nodes = c.nodes
-        if self._along is not None:
-            ds = wound_length(c, load_from, load_to)
-            shifted = self._along.values_at(current, -ds)
-            start = self.surface.xi_range[0][0]
-            inside = nodes.xi[0] - ds >= start - 1e-9 * (1.0 + start)
-            q[nodes.u_dofs[inside]] = shifted[inside, :3] - np.array([ds, 0.0, 0.0])
-            q[nodes.theta_dofs[inside]] = shifted[inside, 3:]
-        turn_wound(q, current, nodes, c.psi.x.array, self.frame, load_from, load_to - load_from)
-
-
-def _gathered(comm, *arrays) -> list[np.ndarray]:
-    return [np.concatenate(comm.allgather(np.ascontiguousarray(a))) for a in arrays]
-
-
-def centre_line(hybrid) -> tuple[np.ndarray, np.ndarray]:
-    """The tape's line along its length: reference coordinates x [m] (sorted) and current points
-    (n, 3) [m], from the beam's nodes and the shell's nodes on its middle line, gathered on every
-    rank (collective)."""
-    comm = hybrid.shell.strip.mesh.comm
-    beam = hybrid.beam.model
-    nodes = Nodes(hybrid.shell.model)
-    middle = np.abs(nodes.xi[1]) < 1e-9 * hybrid.shell.surface.xi_range[1][1]
-    x_shell = nodes.xi[0, middle]
-    p_shell = nodes.positions(hybrid.shell.model.q.x.array)[:, middle].T
-    x_beam = beam.node_points[:, 0]
-    p_beam = beam.node_points + beam.q.x.array[beam.node_u_dofs]
-    x, points = _gathered(comm, np.concatenate([x_shell, x_beam]), np.vstack([p_shell, p_beam]))
-    order = np.argsort(x, kind="stable")
-    x, points = x[order], points[order]
-    keep = np.concatenate([[True], np.diff(x) > 1e-12])  # a node shared by ranks, once
-    return x[keep], points[keep]
-
-
-def winding_along(frame: HubFrame, angle: float, points: np.ndarray) -> np.ndarray:
-    """The winding angles [rad] of points (n, 3) along the tape from its root at hub angle
-    ``angle``: the hub angle less each point's swept angle, unwrapped along the tape from the
-    root's, 0 (successive points less than half a turn apart)."""
-    raw = angle - frame.polar(points.T)[1]
-    psi = np.unwrap(raw)
-    return psi - 2 * math.pi * np.round(psi[0] / (2 * math.pi))
 
 
 @dataclass
