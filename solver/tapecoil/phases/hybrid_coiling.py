@@ -39,10 +39,8 @@ from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.hub.contact import default_penalty, spiral_obstacle
 from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_station
-from tapecoil.measures.section_forces import SectionForces
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.hybrid_problem import HybridProblem
-from tapecoil.models.nodes import Nodes
 from tapecoil.models.tape_beam import tape_beam
 from tapecoil.models.window import carry_over
 from tapecoil.phases.coiling_run import CoilingRun
@@ -261,9 +259,7 @@ class HybridCoiling:
         station = float(np.interp(self.angle - behind, psi, x))
         start, end = h.shell.surface.xi_range[0]
         if start < station < end:
-            if getattr(h, "_sections", None) is None:
-                h._sections = SectionForces(h.shell.model, Nodes(h.shell.model), self.comm)
-            forces = h._sections()
+            forces = h.shell.section_forces()
             k = int(np.argmin(np.abs(forces["xi1"] - station)))
             where, N = float(forces["xi1"][k]), float(forces["axial_force"][k])
         else:

@@ -20,8 +20,10 @@ from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact
 from tapecoil.hub.frame import HubFrame
+from tapecoil.measures.section_forces import SectionForces
 from tapecoil.models.edges import facet_condition
 from tapecoil.models.materials import shell_material
+from tapecoil.models.nodes import Nodes
 from tapecoil.models.problem import ShellProblem
 from tapecoil.phases.predictors import AlongTape, turn_wound, wound_length
 
@@ -93,7 +95,7 @@ class WindowOnHub(ShellProblem):
             # T spread evenly over the free end's arc, as the full shell's pull
             energy = energy - config.coiling.tension * model.u[0] / tp.b * model.ds(FREE_END)
         self._energy = energy
-        self._strain_form = self._root_form = None  # compiled when first read
+        self._strain_form = self._root_form = self._sections = None  # made when first read
 
     def forms(self) -> tuple:
         F = ufl.derivative(self._energy, self.model.q, self.model.dq)
@@ -111,6 +113,13 @@ class WindowOnHub(ShellProblem):
     def commit(self, load: float) -> None:
         if not self.flattening:
             self.contact.update(load)
+
+    def section_forces(self) -> dict:
+        """The window's section forces along the tape
+        (:class:`~tapecoil.measures.section_forces.SectionForces`; collective)."""
+        if self._sections is None:
+            self._sections = SectionForces(self.model, Nodes(self.model), self.strip.mesh.comm)
+        return self._sections()
 
     def strain_energy(self) -> float:
         """The window's strain energy [J] (collective)."""

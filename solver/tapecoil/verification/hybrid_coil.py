@@ -26,11 +26,11 @@ TENSION_FROM = 6.0
 FREE_PART_TOLERANCE = 1e-4
 
 
-def _band_mean(angles, values, start: float) -> float | None:
-    """The mean over the hub angle from ``start`` on of a reading taken at the steps' ``angles``
-    (trapezoids): the steps crowd where Newton works hardest, which a plain mean over the steps
-    would weigh the more."""
-    picked = [(a, v) for a, v in zip(angles, values, strict=True) if a >= start and v is not None]
+def _band_mean(readings, start: float) -> float | None:
+    """The mean over the hub angle from ``start`` on of ``readings``, (hub angle, value) at the
+    steps, None values skipped (trapezoids): the steps crowd where Newton works hardest, which a
+    plain mean over the steps would weigh the more."""
+    picked = [(a, v) for a, v in readings if a >= start and v is not None]
     if len(picked) < 2:
         return float(picked[0][1]) if picked else None
     a, v = np.array(picked).T
@@ -85,7 +85,7 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
         "hybrid": {
             "strain_energy": hybrid.strain_energy(),
             **geometry,
-            "coiling_tension_outer": _band_mean([a for a, _ in outer], [t for _, t in outer], TENSION_FROM),
+            "coiling_tension_outer": _band_mean(outer, TENSION_FROM),
             "free_part_height": float(hybrid_height),
             "dofs": global_size(h.shell.model.W) + global_size(h.beam.model.W),
             "steps": len(hybrid.records),
@@ -114,9 +114,7 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
         "coiled_length": last["coiled_length"],
         "outer_radius": last["outer_radius"],
         "free_part_height": float(section_centroid(model.model, station, comm)[2]),
-        "coiling_tension_outer": _band_mean(
-            [a for a, _ in full_outer], [t for _, t in full_outer], TENSION_FROM
-        ),
+        "coiling_tension_outer": _band_mean(full_outer, TENSION_FROM),
         "dofs": global_size(model.model.W),
         "steps": len(coiling),
         "newton_iterations": sum(int(r["newton_iterations"]) for r in rows),
