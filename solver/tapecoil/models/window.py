@@ -195,6 +195,18 @@ def _frames_from_shell(sections, points, references, flat_of) -> tuple[np.ndarra
     return np.array(frames).reshape(-1, 9), np.array(curvatures).reshape(-1, 3)
 
 
+def _unwrapped_pitch(x: np.ndarray, rotations: np.ndarray, edge: float, edge_angle: float) -> np.ndarray:
+    """The beam nodes' turns about the width axis (y) [rad], from their rotations (n, 3, 3) at
+    points ``x`` (n,) [m] along the tape, unwrapped outwards from the window's ``edge`` [m]
+    starting from ``edge_angle`` there (the shell's director angle theta_1 at that edge)."""
+    pitch = np.arctan2(rotations[:, 0, 2], rotations[:, 2, 2]) if len(x) else np.zeros(0)
+    out = np.empty_like(pitch)
+    for side in (x <= edge, x > edge):
+        order = np.flatnonzero(side)[np.argsort(np.abs(x[side] - edge), kind="stable")]
+        out[order] = np.unwrap(np.concatenate([[edge_angle], pitch[order]]))[1:]
+    return out
+
+
 def full_shell(model) -> SimpleNamespace:
     """A full shell's state (a :class:`~tapecoil.models.shell.NaghdiShell` on a strip along the
     whole tape, a coiled tape's, say) as the old side of :func:`carry_over`: shell everywhere,
@@ -206,7 +218,9 @@ def full_shell(model) -> SimpleNamespace:
 
 
 def carry_over(old, new) -> None:
-    """Set ``new``'s shell, beam and ties from ``old``'s (see the module; collective).
+    """Set ``new``'s shell, beam and ties from ``old``'s (see the module; collective). ``new``
+    may be a full shell (:func:`full_shell`): its state is then the old shell's in the old
+    window and placed by the old beam's sections elsewhere.
 
     Both hybrids are of the same tape along x, with the same element length and the same shell
     elements across; each tie's end a beam node. ``old`` must be at an accepted step (its
@@ -227,11 +241,6 @@ def carry_over(old, new) -> None:
                 "carry over: the old hybrid is not at an accepted step (its beam's rotation "
                 "increments are not zero)"
             )
-    scale = 1.0 + new.beam.mesh.comm.allreduce(
-        float(np.abs(new.beam.model.node_points).max(initial=0.0)), op=MPI.MAX
-    )
-    tolerance = 1e-9 * scale
-
     # the old states, every rank's, node by node
     sections = _ShellSections(shell, comm)
     old_nodes = Nodes(shell)
@@ -250,6 +259,9 @@ def carry_over(old, new) -> None:
     else:
         beam_points, beam_u, points, old_frames, old_curvatures = (np.zeros((0, n)) for n in (3, 3, 3, 9, 3))
         beam_frames = beam_reference = np.zeros((0, 3, 3))
+    # the tape's extent, from the old states gathered on every rank
+    scale = 1.0 + max(float(np.abs(shell_xi).max(initial=0.0)), float(np.abs(beam_points).max(initial=0.0)))
+    tolerance = 1e-9 * scale
     beam_tree = cKDTree(beam_points)
     rotations = beam_frames @ np.transpose(beam_reference, (0, 2, 1))  # Q = Lambda Lambda_0^T
     old_start, old_end = window_of(old)
@@ -274,9 +286,10 @@ def carry_over(old, new) -> None:
         centres = np.column_stack([xi[placed, 0], np.tile(centre_line, (int(placed.sum()), 1))])
         k = _match(beam_tree, centres, scale, "the new shell's sections", comm)
         for near, side in ((old_start, xi[placed, 0] < old_start), (old_end, xi[placed, 0] > old_end)):
-            # the unbounded angle's branch: the old shell's at its edge on that side
+            # the unbounded angle's branch: the old shell's at its edge on that side, continued
+            # along the beam node by node (a coil turns its sections through many turns)
             edge = np.isclose(shell_xi[:, 0], near, rtol=0, atol=tolerance)
-            rotation_near = float(np.mean(shell_theta[edge, 1]))
+            pitch = _unwrapped_pitch(beam_points[:, 0], rotations, near, float(np.mean(shell_theta[edge, 1])))
             for is_flat in (False, True):
                 pick = side & (flat == is_flat)
                 if not pick.any():
@@ -287,9 +300,11 @@ def carry_over(old, new) -> None:
                 position = centres[pick] + beam_u[k[pick]] + np.einsum("nij,nj->ni", Q, offsets)
                 q[nodes.u_dofs[where]] = position - geometry.phi0(xi[where].T).T
                 director = np.einsum("nij,nj->in", Q, normals)
-                angles = new_model.angles_of(director, xi[where].T, rotation_near=rotation_near)
+                angles = new_model.angles_of(director, xi[where].T, rotation_near=pitch[k[pick]])
                 q[nodes.theta_dofs[where]] = angles.T
     new_model.q.x.scatter_forward()
+    if new.beam is None:
+        return  # a full shell: no beam, no ties
 
     # the new beam's nodes: the old beam's, then fitted to the old shell's sections
     target = new.beam.model
