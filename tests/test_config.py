@@ -93,6 +93,32 @@ def test_integer_accepted_for_float(tmp_path):
         ),
         # an inertia on a hub that does not turn would act on nothing
         ({"hub": {"inertia": 1e-5}}, r"hub\.inertia = 1e-05 kg m\^2 acts only on a hub free to turn"),
+        (
+            {"model": {"kind": "beam"}},
+            r"model\.kind = 'beam' is not allowed: must be one of 'shell', 'hybrid'",
+        ),
+        # the hybrid's window on the shell model would act on nothing
+        ({"model": {"window_ahead": 0.1}}, r"model\.window_ahead acts only on the hybrid model"),
+        (
+            {"model": {"kind": "hybrid", "window_move": 0.0}},
+            r"model\.window_move = 0\.0 .* must be > 0 \[m\]",
+        ),
+        (
+            {"model": {"kind": "hybrid"}, "coiling": {"sense": "equal"}},
+            r"model\.kind = 'hybrid' needs coiling\.sense = 'opposite'",
+        ),
+        (
+            {"model": {"kind": "hybrid"}, "contact": {"turns": "surface"}},
+            r"model\.kind = 'hybrid' needs contact\.turns = 'spiral'",
+        ),
+        (
+            {"model": {"kind": "hybrid"}, "mesh": {"grading": 2.0}},
+            r"model\.kind = 'hybrid' needs mesh\.grading = 1",
+        ),
+        (
+            {"model": {"kind": "hybrid", "window_ahead": 0.5}},
+            r"model\.window_ahead \+ model\.window_behind = 0\.525 m must be shorter than the tape",
+        ),
     ],
 )
 def test_bad_values_are_refused_with_key_and_range(data, message):

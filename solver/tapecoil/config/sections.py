@@ -125,6 +125,32 @@ class CoilingConfig:
 
 
 @dataclass
+class ModelConfig:
+    """The tape's structural model in coiling.
+
+    Attributes:
+        kind: 'shell' (the Naghdi shell over the whole tape) or 'hybrid' (shell on a window
+            around the ploy region, geometrically exact beams before and after it:
+            docs/hybrid.md). The hybrid coils in the opposite sense on the spiral of turns
+            (contact.turns = 'spiral'), on an ungraded mesh (mesh.grading = 1). Its coiled state
+            is carried into the full shell and settled there by one solve at the final hub
+            angle: the stowed state, and the deployment from it, are the full shell's.
+        window_ahead: the hybrid's shell beyond the lift-off point [m] (the ploy region and a
+            margin).
+        window_behind: the hybrid's shell on the coil behind the lift-off point [m].
+        window_move: how far the lift-off travels before the window moves with it [m].
+        tie_penalty: the penalty factor of the ties between shell and beams [-] (times the
+            stiffness of one shell element).
+    """
+
+    kind: str = param("shell", "", ("shell", "hybrid"))
+    window_ahead: float = param(0.15, "m", POSITIVE)
+    window_behind: float = param(0.025, "m", POSITIVE)
+    window_move: float = param(0.025, "m", POSITIVE)
+    tie_penalty: float = param(1e2, "-", POSITIVE)
+
+
+@dataclass
 class MeshConfig:
     """Structured mesh of the strip.
 
@@ -361,6 +387,7 @@ class Config:
     laminate: LaminateConfig = field(default_factory=LaminateConfig)
     hub: HubConfig = field(default_factory=HubConfig)
     coiling: CoilingConfig = field(default_factory=CoilingConfig)
+    model: ModelConfig = field(default_factory=ModelConfig)
     mesh: MeshConfig = field(default_factory=MeshConfig)
     solver: SolverConfig = field(default_factory=SolverConfig)
     contact: ContactConfig = field(default_factory=ContactConfig)
@@ -383,6 +410,7 @@ class Config:
             )
         self.check_laminate()
         self.check_coiling()
+        self.check_model()
 
     def check_laminate(self) -> None:
         """Relate the laminate to the tape (part of :meth:`check`): the plies add up to tape.h,
@@ -421,6 +449,46 @@ class Config:
                 f"the whole tape (tape.L = {tp.L:g} m) is on the hub (hub.radius = {r_hub:g} m, "
                 f"tape.h = {tp.h:g} m per turn) after {largest:.4g} rad ({largest / (2 * math.pi):.3g} "
                 f"turns), the largest hub angle this tape allows"
+            )
+
+    def check_model(self) -> None:
+        """Refuse what the hybrid model cannot do (part of :meth:`check`), and its window's
+        settings on the shell model, where they would not act."""
+        model = self.model
+        if model.kind == "shell":
+            defaults = ModelConfig()
+            for f in dataclasses.fields(model):
+                if f.name != "kind" and getattr(model, f.name) != getattr(defaults, f.name):
+                    raise ConfigError(
+                        f"model.{f.name} acts only on the hybrid model: set model.kind = 'hybrid', or "
+                        f"leave model.{f.name} out"
+                    )
+            return
+        needs = (
+            (
+                self.coiling.sense == "opposite",
+                "coiling.sense = 'opposite'",
+                "the hybrid coils in that sense only",
+            ),
+            (
+                self.contact.turns == "spiral",
+                "contact.turns = 'spiral'",
+                "its beams rest on the spiral of turns",
+            ),
+            (
+                self.mesh.grading == 1.0,
+                "mesh.grading = 1",
+                "its shell and beams share their nodes along the tape",
+            ),
+        )
+        for ok, setting, why in needs:
+            if not ok:
+                raise ConfigError(f"model.kind = 'hybrid' needs {setting}: {why}")
+        window = model.window_ahead + model.window_behind
+        if window >= self.tape.L:
+            raise ConfigError(
+                f"model.window_ahead + model.window_behind = {window:g} m must be shorter than the tape "
+                f"(tape.L = {self.tape.L:g} m): the hybrid's shell is a window of it"
             )
 
     def coiling_warnings(self) -> list[str]:
