@@ -67,15 +67,71 @@ def test_bad_hybrid_coilings_are_refused_before_anything_is_built():
 @pytest.mark.mpi
 def test_two_ranks_coil_the_hybrid_as_one():
     """The hybrid coiled on 2 ranks and on each alone past its first window move: the same
-    windows, the same energy (1e-9) and lift-off (1e-9 of the length)."""
+    windows, the same energy (1e-9) and lift-off (1e-9 of the length); carried into the full
+    shell and settled there (a hybrid run's stowed state), the same energy (1e-9)."""
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.hybrid_coiling_run import settle
+
     assert MPI.COMM_WORLD.size > 1
     runs = []
     for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
         run = HybridCoiling(coarse(4.5), comm)
         run.flatten()
         run.coil(4.5)
-        runs.append((run.strain_energy(), run.lift_off(), run.moves))
-    (e2, s2, m2), (e1, s1, m1) = runs
+        shell = CoilingModel(coarse(4.5), comm)
+        run.carry_into(shell)
+        settled = settle(shell, run.angle)["strain_energy_settled"]
+        runs.append((run.strain_energy(), run.lift_off(), run.moves, settled))
+    (e2, s2, m2, settled2), (e1, s1, m1, settled1) = runs
     assert m2 == m1 and len(m1) == 2
     assert e2 == pytest.approx(e1, rel=1e-9)
+    assert settled2 == pytest.approx(settled1, rel=1e-9)
     assert abs(s2 - s1) < 1e-9 * 0.5
+
+
+def test_a_run_with_the_hybrid_model_stows_and_deploys_the_full_shell(tmp_path):
+    """A run with ``model.kind = "hybrid"`` (coarse, 4.5 rad: the window leaves the root once;
+    2 ms of deployment): the coiling's summary names its measures as the shell's does, the
+    hybrid's own strain energy is within 0.5 % of the settled full shell's (measured 0.05 % at 5
+    rad), the stowed checkpoint is the settled full shell's and deploys, and a resumed run
+    returns the completed coiling's summary without coiling again."""
+    import json
+
+    from tapecoil.app.pipeline import run
+    from tapecoil.core.checkpoint import read_meta
+    from tapecoil.post.plots import read_history
+
+    config = coarse(4.5)
+    config = dataclasses.replace(
+        config,
+        model=dataclasses.replace(config.model, kind="hybrid"),
+        deployment=dataclasses.replace(config.deployment, t_end=2e-3, dt=2e-4),
+        output=dataclasses.replace(config.output, report=False),
+    )
+    out = tmp_path / "run"
+    summary = run(config, out, progress=False)
+    coiling = summary["coiling"]
+    assert coiling["completed"] and coiling["hub_angle"] == pytest.approx(4.5)
+    measures, figures = coiling["measures"], coiling["run"]
+    for name in ("stored_energy_coiled", "strain_energy_total", "outer_radius", "curvature_longitudinal"):
+        assert measures[name]["computed"] is not None, name
+    settled = measures["strain_energy_total"]["computed"]
+    assert figures["model"] == "hybrid" and figures["settling"]["strain_energy_settled"] == pytest.approx(
+        settled
+    )
+    assert measures["hybrid"]["strain_energy"] == pytest.approx(settled, rel=5e-3)
+    assert figures["dofs"] < figures["full_shell_dofs"]
+    assert len(figures["windows"]) == 2 and figures["windows"][1][1] > 0.0
+    history = read_history(out / "coiling_history.csv")
+    assert history["window_start"][-1] > 0.0 and np.all(np.isfinite(history["strain_energy"]))
+    meta = read_meta(out / "stowed")
+    assert meta["completed"] and meta["run"]["model"] == "hybrid"
+    assert summary["deployment"]["time"] == pytest.approx(2e-3)
+    assert (out / "snapshots").is_dir()
+
+    again = run(config, out, phases=("coiling",), resume=True, progress=False)
+    assert again["coiling"]["measures"]["strain_energy_total"]["computed"] == pytest.approx(
+        settled, rel=1e-12
+    )
+    assert again["coiling"]["run"]["steps"] == figures["steps"]
+    assert json.loads((out / "summary.json").read_text())["coiling"]["run"]["model"] == "hybrid"

@@ -242,15 +242,7 @@ class CoilingPhase(HubTurningPhase):
 
     def finish(self, directory: Path) -> None:
         """coiled_cells.csv: the final state at the cell midpoints (for the pictures)."""
-        self._cells = cells = coiled_cells(self.model.tape)
-        if self.model.comm.rank == 0:
-            np.savetxt(
-                directory / "coiled_cells.csv",
-                np.column_stack(list(cells.values())),
-                delimiter=",",
-                header=",".join(cells),
-                comments="",
-            )
+        self._cells = write_coiled_cells(self.model, directory)
 
     def summary(self, interrupted, t_start: float) -> dict:
         """The coiling phase's summary: measures against the theory and the run's figures."""
@@ -269,6 +261,21 @@ class CoilingPhase(HubTurningPhase):
             "measures": measures,
             "run": self.run_figures(len([r for r in self.history if r["phase"] == "coil"]), t_start),
         }
+
+
+def write_coiled_cells(model: CoilingModel, directory: Path) -> dict:
+    """coiled_cells.csv in ``directory``: the state at the cell midpoints (for the pictures);
+    returns them (collective)."""
+    cells = coiled_cells(model.tape)
+    if model.comm.rank == 0:
+        np.savetxt(
+            directory / "coiled_cells.csv",
+            np.column_stack(list(cells.values())),
+            delimiter=",",
+            header=",".join(cells),
+            comments="",
+        )
+    return cells
 
 
 def run_coiling(
@@ -298,6 +305,8 @@ def run_coiling(
         restart = meta.get("run")
         if restart is None:
             raise ValueError(f"{resume} holds no coiling restart state")
+        if restart.get("model") == "hybrid":
+            raise ValueError(f"{resume} is the hybrid model's coiling: resume it with model.kind = 'hybrid'")
     else:
         model = CoilingModel(config, comm)
     phase = CoilingPhase(model, restart, stop)

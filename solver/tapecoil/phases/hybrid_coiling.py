@@ -35,6 +35,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.core.dofs import global_size
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.hub.contact import default_penalty, spiral_obstacle
 from tapecoil.hub.frame import HubFrame
@@ -42,7 +43,7 @@ from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_statio
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.hybrid_problem import HybridProblem
 from tapecoil.models.tape_beam import tape_beam
-from tapecoil.models.window import carry_over
+from tapecoil.models.window import carry_over, full_shell
 from tapecoil.phases.coiling_run import CoilingRun
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.predictors import choose_predictor, wound_length
@@ -71,14 +72,20 @@ class WindowSettings:
     move: float = 0.025
     tie_penalty: float = 1e2
 
+    @classmethod
+    def from_config(cls, model) -> WindowSettings:
+        """From a :class:`~tapecoil.config.ModelConfig` (the [model] table)."""
+        return cls(model.window_ahead, model.window_behind, model.window_move, model.tie_penalty)
+
 
 @dataclass
 class CoilingRecord:
-    """A converged step of the hybrid's coiling: the hub angle [rad], the window (start, end)
-    [m] along the tape, the lift-off's place along it [m], the strain energy [J], the step's
-    Newton iterations and the wall time since the run began [s]."""
+    """A converged step of the hybrid's coiling: the hub angle [rad] and the step to it [rad],
+    the window (start, end) [m] along the tape, the lift-off's place along it [m], the strain
+    energy [J], the step's Newton iterations and the wall time since the run began [s]."""
 
     hub_angle: float
+    step: float
     window: tuple[float, float]
     lift_off: float
     strain_energy: float
@@ -89,7 +96,8 @@ class CoilingRecord:
 class HybridCoiling:
     """The coiling of ``config``'s tape with the hybrid model (see the module): :meth:`flatten`,
     then :meth:`coil` to a hub angle; ``records`` holds a row per converged step and ``moves``
-    the window's places, (hub angle, start, end). Hub-angle steps from ``first_step`` up to
+    the window's places, (hub angle, start, end). ``window``: by default the [model] table's
+    (``config.model``). Hub-angle steps from ``first_step`` up to
     ``max_step`` [rad] (by default the full shell's coiling's: ``coiling.max_step``, else its
     predictor's). Each window's joint solver reads PETSc options under the prefix
     ``hybrid_coil<k>_``, k the window's number from 0; ``solver.petsc_options`` and
@@ -104,7 +112,7 @@ class HybridCoiling:
         max_step: float | None = None,
     ):
         self.config, self.comm = config, comm
-        self.window = window or WindowSettings()
+        self.window = window or WindowSettings.from_config(config.model)
         self.first_step, self.max_step = first_step, max_step
         config = self.config
         tp, cc = config.tape, config.contact
@@ -209,6 +217,10 @@ class HybridCoiling:
         return HybridProblem(shell, beam, ties=ties, modulus=tp.E, penalty=self.window.tie_penalty, name=name)
 
     # -- measures ------------------------------------------------------------------------------
+    def dofs(self) -> int:
+        """The hybrid's unknowns: its shell's and its beam's (collective)."""
+        return global_size(self.hybrid.shell.model.W) + global_size(self.hybrid.beam.model.W)
+
     def strain_energy(self) -> float:
         """The strain energy of shell and beam [J] (the ties' penalty energy apart; collective)."""
         return self.hybrid.shell.strain_energy() + self.hybrid.beam.model.strain_energy()
@@ -298,6 +310,7 @@ class HybridCoiling:
         self.records.append(
             CoilingRecord(
                 self.angle,
+                float(step.step),
                 self._ends(self.hybrid.shell.surface.xi_range[0][0]),
                 self.lift_off(),
                 self.strain_energy(),
@@ -306,13 +319,14 @@ class HybridCoiling:
             )
         )
 
-    def flatten(self) -> None:
-        """Flatten the root onto the hub (``coiling.flatten_steps`` steps), the pull held."""
+    def flatten(self) -> list:
+        """Flatten the root onto the hub (``coiling.flatten_steps`` steps), the pull held;
+        returns the steps' records (:class:`~tapecoil.core.stepping.StepRecord`)."""
         self._t0 = time.perf_counter()
         h = self.hybrid
         steps = self.config.coiling.flatten_steps
         h.shell.flattening = True
-        h.solve(
+        records = h.solve(
             1.0,
             first_step=1.0 / steps,
             max_step=1.0 / steps,
@@ -322,6 +336,7 @@ class HybridCoiling:
         h.shell.flattening = False
         h.beam.committed_load = 0.0
         h._set_load(0.0)
+        return records
 
     def coil(self, final_angle: float, on_step=None) -> None:
         """Turn the hub from where it is to ``final_angle`` [rad], the window moved with the
@@ -355,6 +370,21 @@ class HybridCoiling:
                 easy_iterations=EASY_ITERATIONS,
             )
             self.angle = target
+
+    def carry_into(self, model) -> None:
+        """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingModel` of
+        the same configuration) to this hybrid's state: the hub angle and the pull, the shell's
+        state where the window is and the beams' sections placed elsewhere
+        (:func:`~tapecoil.models.window.carry_over`), and the winding angles (collective). The
+        full shell is then in the hybrid's configuration, not in its own equilibrium."""
+        x, points = centre_line(self.hybrid)
+        psi = winding_along(self.frame, self.angle, points)
+        model.set_hub_angle(self.angle)
+        model.tension.value = self.config.coiling.tension
+        carry_over(self.hybrid, full_shell(model.model))
+        contact = model.contact
+        contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
+        contact.update(self.angle)
 
     def _move_window(self) -> None:
         tp = self.config.tape

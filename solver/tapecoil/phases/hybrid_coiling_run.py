@@ -1,0 +1,292 @@
+"""The hybrid's coiling as a phase of the one runner: ``[model] kind = "hybrid"`` in a run.
+
+:class:`HybridCoilingPhase` coils with :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`
+(a shell window that follows the lift-off, beams before and after it) and keeps a full shell
+of the same tape (a :class:`~tapecoil.phases.coiling.CoilingModel`) in the hybrid's
+configuration: after every converged step the hybrid's state is carried into it
+(:meth:`HybridCoiling.carry_into`), so that the snapshots, the ParaView series and the
+geometric measures of a step (the deployed fraction, the penetration) are the whole tape's, as
+in the shell's coiling. The energies and forces of the history rows are the hybrid's own.
+
+At the end the full shell, placed in the hybrid's configuration, is solved once at the final
+hub angle ("settled"): the beams' sections are rigid (the coil's flattened strip without its
+edges' lift, the arc without its flattening under load), and the shell's interpolation of the
+placed turns strains it (on the coarse mesh an element spans about a radian of the hub). That
+equilibrium is the stowed state: its checkpoint, the coil's measures of the summary (the same
+names as the shell's) and the deployment from it are the full shell's. The summary's
+``measures["hybrid"]`` keeps the hybrid's own energy and what settling changed.
+
+A hybrid coiling is not resumed mid-run (its beams and window are not checkpointed): a stopped
+one is coiled again from the start.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from tapecoil.config import Config
+from tapecoil.core.dofs import global_size
+from tapecoil.core.stepping import ContinuationError
+from tapecoil.measures.coiling import coil_measures
+from tapecoil.measures.deployment import lift_off
+from tapecoil.measures.payout import (
+    OUTER_TURN_COLUMNS,
+    eq_4_5,
+    steady_torque,
+    tension_law,
+    tension_law_with_edges,
+)
+from tapecoil.models.nodes import Nodes
+from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling_run import HubTurningPhase, write_coiled_cells
+from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings
+from tapecoil.phases.runner import LOG, run_phase
+
+__all__ = ["HybridCoilingPhase", "run_hybrid_coiling", "settle"]
+
+
+class HybridCoilingPhase(HubTurningPhase):
+    """The hybrid's coiling to ``coiling.hub_angle`` (see the module), the full shell settled at
+    the end. ``restart``: a completed hybrid coiling's restart state (its history and settling),
+    whose full shell is ``model``; nothing is computed then."""
+
+    name, checkpoint_name = "coiling", "stowed"
+
+    def __init__(
+        self, config: Config, comm=MPI.COMM_WORLD, model: CoilingModel | None = None, restart=None, stop=None
+    ):
+        super().__init__(model or CoilingModel(config, comm))
+        self.config, self.comm, self.stop = config, comm, stop
+        self.target = config.coiling.hub_angle
+        self.settling: dict = dict(restart["settling"]) if restart else {}
+        self.windows: list = [tuple(w) for w in restart["windows"]] if restart else []
+        self.history = list(restart["history"]) if restart else []
+        self.completed = restart is not None
+        self.coiling = None
+        self._cells = None
+        self._t0 = time.perf_counter() - (self.history[-1]["wall_time"] if self.history else 0.0)
+
+    def restart_state(self) -> dict:
+        return {
+            "model": "hybrid",
+            "history": self.history,
+            "settling": self.settling,
+            "windows": self.windows,
+        }
+
+    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
+        window = f" window {row['window_start']:.3f}-{row['window_end']:.3f} m"
+        # no checkpoints on the way: the hybrid's state is not one a restart could continue
+        return row["hub_angle"], row["step"], row["newton_iterations"], f" {row['phase']}{window}", False
+
+    # -- the run ------------------------------------------------------------------------------
+    def advance(self) -> None:
+        self._t0 = time.perf_counter()
+        self.coiling = coiling = HybridCoiling(
+            self.config, self.comm, window=WindowSettings.from_config(self.config.model)
+        )
+        flattening = coiling.flatten()
+        self._step("flatten", 0.0, 0.0, sum(int(r.iterations) for r in flattening))
+        coiling.coil(self.target, on_step=lambda r: self._step("coil", r.hub_angle, r.step, r.iterations))
+        self.settle()
+        self.completed = True
+
+    def _step(self, phase: str, angle: float, step: float, iterations: int) -> None:
+        """A converged step: the full shell put in the hybrid's configuration, the row recorded."""
+        coiling = self.coiling
+        coiling.carry_into(self.model)
+        self.windows = [tuple(w) for w in coiling.moves]
+        row = self._row(phase, angle, step, iterations)
+        self.history.append(row)
+        if self.on_row is not None:
+            self.on_row(row)
+        if self.stop is not None:
+            self.stop.check(self.comm)
+
+    def _row(self, phase: str, angle: float, step: float, iterations: int) -> dict:
+        """What the step measured: the hybrid's energy and forces, the whole tape's geometry (the
+        full shell in the hybrid's configuration) with the shell's coiling's column names."""
+        coiling, config = self.coiling, self.config
+        pull = config.coiling.tension
+        geometry = coiling.coil_geometry()
+        lam = lift_off(self.model.tape)["lambda"]
+        start, end = coiling.hybrid.shell.surface.xi_range[0]
+        outer = coiling.outer_turn_tension() if phase == "coil" else None
+        if outer is None:
+            outer_columns = dict.fromkeys(OUTER_TURN_COLUMNS, "")
+        else:
+            rho = outer["outer_turn_radius"]
+            outer_columns = {
+                "station_winding": outer["station_winding"],
+                "outer_turn_radius": rho,
+                "coiling_tension_outer": outer["coiling_tension_outer"],
+                "eq_2_6_outer": float(tension_law(rho, config)),
+                "eq_2_6_edges_outer": tension_law_with_edges(rho, config),
+                "eq_4_5": float(eq_4_5(lam, config)),
+                "steady_torque": steady_torque(rho, pull, config),
+            }
+        root_tension = coiling.root_tension()
+        return {
+            "phase": phase,
+            "hub_angle": angle,
+            "step": step,
+            "newton_iterations": iterations,
+            "tension": pull,
+            "root_tension": root_tension,
+            "coiling_tension": pull - root_tension,
+            "strain_energy": coiling.strain_energy(),
+            "max_penetration": self.model.tape.max_penetration(),
+            "coiled_length": geometry["coiled_length"],
+            "outer_radius": geometry["outer_radius"],
+            "lambda": lam,
+            "window_start": start,
+            "window_end": end,
+            "dofs": coiling.dofs(),
+            **outer_columns,
+            "wall_time": time.perf_counter() - self._t0,
+        }
+
+    def settle(self) -> None:
+        """The full shell settled at the final hub angle (:func:`settle`), with the hybrid's
+        energy beside its own (collective)."""
+        self.settling = {
+            "strain_energy_hybrid": self.coiling.strain_energy(),
+            **settle(self.model, self.coiling.angle),
+        }
+        LOG.info(
+            "the full shell settled from the hybrid's coil in %d Newton iterations: strain energy "
+            "%.6g J (hybrid %.6g J), displaced by at most %.3g m",
+            self.settling["newton_iterations"],
+            self.settling["strain_energy_settled"],
+            self.settling["strain_energy_hybrid"],
+            self.settling["largest_displacement"],
+        )
+
+    # -- the results ----------------------------------------------------------------------------
+    def finish(self, directory: Path) -> None:
+        """coiled_cells.csv, as the shell's coiling writes it."""
+        self._cells = write_coiled_cells(self.model, directory)
+
+    def run_figures(self, steps: int, t_start: float) -> dict:
+        """The shell's coiling's run figures, the DOFs the hybrid's (at its largest), with the
+        hybrid's own: its model, its windows and the settling's solve."""
+        history, res = self.history, self.model.strip.resolution
+        return {
+            "model": "hybrid",
+            "ranks": self.comm.size,
+            "dofs": max((int(r["dofs"]) for r in history), default=0),
+            "full_shell_dofs": global_size(self.model.model.W),
+            "mesh": f"{res.along} x {res.across}",
+            "predictor": self.model.predictor,
+            "penalty": self.model.penalty,
+            "steps": steps,
+            "newton_iterations": int(sum(int(r["newton_iterations"]) for r in history)),
+            "max_penetration": max((float(r["max_penetration"]) for r in history), default=0.0),
+            "wall_time": history[-1]["wall_time"] if history else 0.0,
+            "process_wall_time": time.perf_counter() - t_start,
+            "windows": [list(w) for w in self.windows],
+            "settling": self.settling,
+        }
+
+    def summary(self, interrupted, t_start: float) -> dict:
+        """The coil's measures of the settled full shell, named as the shell's coiling's, and the
+        hybrid's own beside them."""
+        measures = coil_measures(self.model.tape, self._cells)
+        hybrid = {"strain_energy": self.settling.get("strain_energy_hybrid")}
+        last = next((r for r in reversed(self.history) if r["phase"] == "coil"), None)
+        if last is not None:
+            hybrid.update(coiled_length=last["coiled_length"], outer_radius=last["outer_radius"])
+        measures["hybrid"] = hybrid
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "hub_angle": self.model.root.angle,
+            "target_hub_angle": self.target,
+            "measures": measures,
+            "run": self.run_figures(len([r for r in self.history if r["phase"] == "coil"]), t_start),
+        }
+
+
+def settle(model: CoilingModel, angle: float) -> dict:
+    """Solve the full shell of ``model``, put in a hybrid's configuration at the hub angle
+    ``angle`` [rad], once there: its equilibrium. Returns the solve's Newton iterations and
+    wall time [s], the strain energy [J] before and after, and the largest displacement [m]
+    and director angle change [rad] it made; on failure the state is put back and
+    :class:`~tapecoil.core.stepping.ContinuationError` raised (collective)."""
+    carried_energy = model.tape.energies()["strain"]
+    before = model.model.q.x.array.copy()
+    model.viscosity.value = 0.0
+    started = time.perf_counter()
+    result = model.solver.solve()
+    if not result.converged:
+        model.model.q.x.array[:] = before
+        model.model.q.x.scatter_forward()
+        raise ContinuationError(
+            f"the full shell did not settle from the hybrid's coiled state at {angle:.6g} rad "
+            f"(SNES {result.reason_name} after {result.iterations} iterations); the stowed "
+            "checkpoint holds the hybrid's configuration, not an equilibrium of the full shell",
+            angle,
+        )
+    model.update(angle)
+    nodes = Nodes(model.model)
+    change = model.model.q.x.array - before
+    moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
+    turned = float(np.abs(change[nodes.theta_dofs]).max(initial=0.0))
+    comm = model.comm
+    return {
+        "newton_iterations": int(result.iterations),
+        "wall_time": time.perf_counter() - started,
+        "strain_energy_carried": carried_energy,
+        "strain_energy_settled": model.tape.energies()["strain"],
+        "largest_displacement": comm.allreduce(moved, op=MPI.MAX),
+        "largest_director_turn": comm.allreduce(turned, op=MPI.MAX),
+    }
+
+
+def run_hybrid_coiling(
+    config: Config,
+    directory: str | Path,
+    comm=MPI.COMM_WORLD,
+    resume: str | Path | None = None,
+    progress: bool = True,
+    stop=None,
+) -> tuple[dict, CoilingModel]:
+    """Coil with the hybrid into ``directory`` (the files of
+    :func:`~tapecoil.phases.coiling_run.run_coiling`); returns the phase summary and the full
+    shell's settled :class:`CoilingModel`. ``resume``: a checkpoint of a completed hybrid
+    coiling (its summary again, nothing computed); one of a stopped hybrid coiling cannot be
+    continued, and the coiling starts again."""
+    from tapecoil.core.checkpoint import read_meta
+    from tapecoil.phases.coiling import read_checkpoint
+
+    t_start = time.perf_counter()
+    if resume is not None:
+        meta = read_meta(resume)
+        restart = meta.get("run") or {}
+        if meta.get("completed") and restart.get("model") == "hybrid":
+            model, _ = read_checkpoint(resume, config, comm)
+            LOG.info("hybrid coiling: completed in %s at %.6g rad", resume, model.root.angle)
+            phase = HybridCoilingPhase(config, comm, model=model, restart=restart)
+            return phase.summary(None, t_start), model
+        LOG.warning(
+            "hybrid coiling: %s cannot be continued (a stopped hybrid coiling); coiling again", resume
+        )
+    phase = HybridCoilingPhase(config, comm, stop=stop)
+    res = phase.model.strip.resolution
+    LOG.info(
+        "coiling with the hybrid: window %g m ahead of the lift-off and %g m behind it, mesh %d x %d, "
+        "to %g rad on %d rank(s)",
+        config.model.window_ahead,
+        config.model.window_behind,
+        res.along,
+        res.across,
+        phase.target,
+        comm.size,
+    )
+    summary = run_phase(phase, directory, config, comm, phase.model.model, None, progress, t_start)
+    return summary, phase.model
