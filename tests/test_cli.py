@@ -71,6 +71,14 @@ def test_coil_refuses_a_hub_angle_longer_than_the_tape(tmp_path, capsys):
     assert not (tmp_path / "out").exists()  # nothing was started
 
 
+def test_run_refuses_a_hybrid_it_cannot_coil_before_computing(tmp_path, capsys):
+    path = tmp_path / "equal.toml"
+    path.write_text('[coiling]\nsense = "equal"\n')
+    assert main(["run", str(path), "--model", "hybrid", "--out", str(tmp_path / "out")]) == 2
+    assert "model.kind = 'hybrid' needs coiling.sense = 'opposite'" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()  # nothing was started
+
+
 class _Started(Exception):
     """Raised by the stand-in for the pipeline: the command got as far as computing."""
 

@@ -65,6 +65,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("coil", help="coil the tape onto the hub to the stowed state (quasi-static)")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
     p.add_argument("--mesh", choices=("coarse", "default", "fine"), help="mesh preset (overrides the file)")
+    _model_option(p)
     p.add_argument("--out", help="results directory (default: <output.directory>/coil)")
     p.add_argument(
         "--resume",
@@ -90,6 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("run", help="the whole pipeline: coil, stow, deploy")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
     p.add_argument("--mesh", choices=("coarse", "default", "fine"), help="mesh preset (overrides the file)")
+    _model_option(p)
     p.add_argument("--out", help="results directory (default: <output.directory>/run)")
     p.add_argument(
         "--resume",
@@ -119,6 +121,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", nargs="?", help="TOML configuration to check and print")
     p.set_defaults(func=cmd_config)
     return parser
+
+
+def _model_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--model",
+        choices=("shell", "hybrid"),
+        help="the coiling's model, model.kind (overrides the file): the full shell, or the "
+        "shell-beam hybrid (its stowed state and the deployment are the full shell's)",
+    )
 
 
 def _common_run_options(p: argparse.ArgumentParser) -> None:

@@ -32,7 +32,9 @@ def run(
     """Run ``phases`` into ``directory`` and return its summary (also written as summary.json).
 
     ``phases``: ("coiling",), ("deployment",) (from the checkpoint ``stowed``) or both, the
-    deployment starting from the coiling's stowed state; "payout" in place of "deployment" pays
+    deployment starting from the coiling's stowed state; the coiling by ``config.model.kind``'s
+    model (the hybrid's: :mod:`tapecoil.phases.hybrid_coiling_run`, its stowed state the full
+    shell's); "payout" in place of "deployment" pays
     the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`). ``resume``: go on
     from the directory's own checkpoints (stowed/, deployed/, paid_out/) as if the run had never stopped;
     ``coiling_checkpoint``: resume the coiling from that checkpoint instead. A stop signal (see
@@ -42,6 +44,7 @@ def run(
     """
     from tapecoil.phases.coiling_run import run_coiling
     from tapecoil.phases.deployment_run import run_deployment
+    from tapecoil.phases.hybrid_coiling_run import run_hybrid_coiling
     from tapecoil.phases.payout import run_payout
 
     if "deployment" in phases and "payout" in phases:
@@ -61,7 +64,8 @@ def run(
                 resume_coil = coiling_checkpoint or (
                     own_stowed if resume and is_checkpoint(own_stowed) else None
                 )
-                out["coiling"], model = run_coiling(
+                coil = run_hybrid_coiling if config.model.kind == "hybrid" else run_coiling
+                out["coiling"], model = coil(
                     config, directory, comm, resume=resume_coil, progress=progress, stop=stop
                 )
             if "deployment" in phases and (model is None or out["coiling"]["completed"]):

@@ -98,7 +98,8 @@ def coiling_energies(directory: Path) -> Path | None:
         ("contact_energy_hub", "contact, hub"),
         ("contact_energy_coil", "contact, coil on coil"),
     ):
-        ax[1].semilogy(angle, np.maximum(h[key], 1e-12), label=label)
+        if key in h:  # the hybrid's history has the whole energy alone
+            ax[1].semilogy(angle, np.maximum(h[key], 1e-12), label=label)
     ax[1].set(xlabel="hub angle [rad]", ylabel="energy [J]", title="energy parts (log scale)")
     return _save(fig, figures / "coiling_energies.png")
 
@@ -132,7 +133,8 @@ def coiling_forces(directory: Path) -> Path | None:
     ax[0].set(xlabel="hub angle [rad]", ylabel="force [N]", title="tension")
     rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
     steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, config.wall.bending, config.coiling.sense))
-    ax[1].plot(angle, h["hub_torque"] * 1e3, ".-", label="shell (secant of the energy balance)")
+    if "hub_torque" in h:  # not measured by the hybrid
+        ax[1].plot(angle, h["hub_torque"] * 1e3, ".-", label="shell (secant of the energy balance)")
     if "hub_torque_reaction" in h:
         ax[1].plot(angle, h["hub_torque_reaction"] * 1e3, "-", label="shell (the root's reactions)")
     ax[1].plot(angle, steady * 1e3, "--", label="steady coiling r (T + b w(r))")

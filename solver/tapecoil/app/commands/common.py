@@ -26,6 +26,17 @@ def echo(text: str = "") -> None:
         print(text, flush=True)
 
 
+def with_model(config, kind: str | None):
+    """``config`` with model.kind set to ``kind`` (a command line's --model), checked again."""
+    import dataclasses
+
+    if kind is None:
+        return config
+    config = dataclasses.replace(config, model=dataclasses.replace(config.model, kind=kind))
+    config.check()
+    return config
+
+
 def with_mesh(config, preset: str | None):
     import dataclasses
 

@@ -6,7 +6,7 @@ import argparse
 import json
 
 from tapecoil.app.checks import warn_before_coiling
-from tapecoil.app.commands.common import echo, rank, with_mesh
+from tapecoil.app.commands.common import echo, rank, with_mesh, with_model
 from tapecoil.config import ConfigError, load_config
 
 
@@ -95,7 +95,7 @@ def _resume_path(value, directory, name):
 def cmd_coil(args: argparse.Namespace) -> int:
     from tapecoil.app.pipeline import run
 
-    config = with_mesh(load_config(args.config), args.mesh)
+    config = with_model(with_mesh(load_config(args.config), args.mesh), args.model)
     directory = args.out or f"{config.output.directory}/coil"
     checkpoint = _resume_path(args.resume, directory, "stowed")
     from mpi4py import MPI
@@ -162,7 +162,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     """Coil, stow and deploy; with --resume, go on from the directory's checkpoints."""
     from tapecoil.app.pipeline import run
 
-    config = with_mesh(load_config(args.config), args.mesh)
+    config = with_model(with_mesh(load_config(args.config), args.mesh), args.model)
     directory = args.out or f"{config.output.directory}/run"
     if args.resume:
         _resume_path("", directory, "stowed")
