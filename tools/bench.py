@@ -16,6 +16,13 @@ by the full shell, one after the other in this session: each one's stored energy
 outer coil radius, outer turn's coiling tension (mean from 6 rad on), DOFs, steps, Newton
 iterations and wall time, and the hybrid's against the full shell's. The coiling alone: the
 hybrid does not deploy yet.
+--case hybrid: the benchmark run (coiling to 36 rad, then the deployment to lambda = 1) with
+model.kind = "hybrid" and with the full shell, one after the other in this session, into
+results/bench-hybrid-*/{hybrid,shell}: every measure of both summaries row by row, and each
+phase's steps, Newton iterations and wall time with the hybrid's against the full shell's. The
+hybrid coils; its coiled state settles into the full shell, which deploys (the hybrid's own
+deployment is not built), so the deployment's rows compare two full-shell deployments from the
+two stowed states.
 Run under mpirun for parallel figures: `make bench CASE=coil MESH=default NP=2`.
 """
 
@@ -35,7 +42,9 @@ parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
 parser.add_argument("--angle", type=float, default=1.0, help="final end rotation [rad]")
 parser.add_argument("--json", action="store_true")
-parser.add_argument("--case", default="fold", choices=("fold", "coil", "deploy", "payout", "hybrid-coil"))
+parser.add_argument(
+    "--case", default="fold", choices=("fold", "coil", "deploy", "payout", "hybrid-coil", "hybrid")
+)
 args = parser.parse_args()
 machine = f"{platform.machine()}, {platform.processor() or 'cpu'}, {MPI.COMM_WORLD.size} rank(s)"
 
@@ -65,6 +74,56 @@ if args.case == "hybrid-coil":
         )
         if args.json:
             print(json.dumps(both, indent=2))
+    raise SystemExit(0)
+
+if args.case == "hybrid":
+    import dataclasses
+
+    from tapecoil.app.pipeline import run as run_pipeline
+
+    config = load_config()
+    config = dataclasses.replace(
+        config,
+        mesh=dataclasses.replace(config.mesh, preset=args.mesh),
+        output=dataclasses.replace(config.output, report=False),
+    )
+    base = f"results/bench-hybrid-{args.mesh}-np{MPI.COMM_WORLD.size}"
+    summaries = {}
+    for kind in ("hybrid", "shell"):
+        case = dataclasses.replace(config, model=dataclasses.replace(config.model, kind=kind))
+        summaries[kind] = run_pipeline(case, f"{base}/{kind}", progress=False, report=False)
+    if MPI.COMM_WORLD.rank == 0:
+        print("case: the benchmark run (coiling to 36 rad, deployment), model.kind hybrid and shell")
+        print(f"mesh: {args.mesh}; machine: {machine}")
+        print(f"{'':<44} {'hybrid':>12} {'shell':>12} {'hybrid/shell':>13}")
+
+        def row(name, a, b):
+            ratio = (
+                f"{a / b:>13.6f}" if isinstance(a, float | int) and isinstance(b, float | int) and b else ""
+            )
+            cells = [f"{v:>12.6g}" if isinstance(v, float | int) else f"{'-':>12}" for v in (a, b)]
+            print(f"{name:<44} {cells[0]} {cells[1]} {ratio}")
+
+        total = {kind: 0.0 for kind in summaries}
+        for phase in ("coiling", "deployment"):
+            h, f = summaries["hybrid"].get(phase), summaries["shell"].get(phase)
+            if h is None or f is None:
+                print(f"{phase}: not run by both")
+                continue
+            for name, value in f["measures"].items():
+                other = h["measures"].get(name)
+                if isinstance(value, dict) and "computed" in value and isinstance(other, dict):
+                    row(f"{phase}: {name}", other["computed"], value["computed"])
+            for key in ("dofs", "steps", "newton_iterations", "wall_time"):
+                row(f"{phase}: {key}", h["run"][key], f["run"][key])
+            for kind, s in (("hybrid", h), ("shell", f)):
+                total[kind] += s["run"]["wall_time"]
+        settling = summaries["hybrid"]["coiling"]["run"]["settling"]
+        row("coiling: the hybrid's own strain energy [J]", settling["strain_energy_hybrid"], None)
+        row("coiling: settling's Newton iterations", settling["newton_iterations"], None)
+        row("wall time, coiling + deployment [s]", total["hybrid"], total["shell"])
+        if args.json:
+            print(json.dumps(summaries, indent=2))
     raise SystemExit(0)
 
 if args.case in ("coil", "deploy", "payout"):
