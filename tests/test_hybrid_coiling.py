@@ -93,8 +93,9 @@ def test_a_run_with_the_hybrid_model_stows_and_deploys_the_full_shell(tmp_path):
     """A run with ``model.kind = "hybrid"`` (coarse, 4.5 rad: the window leaves the root once;
     2 ms of deployment): the coiling's summary names its measures as the shell's does, the
     hybrid's own strain energy is within 0.5 % of the settled full shell's (measured 0.05 % at 5
-    rad), the stowed checkpoint is the settled full shell's and deploys, and a resumed run
-    returns the completed coiling's summary without coiling again."""
+    rad), the stowed checkpoint is the settled full shell's and deploys, a resumed run
+    returns the completed coiling's summary without coiling again, and the report draws the
+    hybrid's history and says how the stowed state was made."""
     import json
 
     from tapecoil.app.pipeline import run
@@ -128,6 +129,13 @@ def test_a_run_with_the_hybrid_model_stows_and_deploys_the_full_shell(tmp_path):
     assert meta["completed"] and meta["run"]["model"] == "hybrid"
     assert summary["deployment"]["time"] == pytest.approx(2e-3)
     assert (out / "snapshots").is_dir()
+
+    if MPI.COMM_WORLD.rank == 0:  # the report's figures from the hybrid's history, and its note
+        from tapecoil.post.report import write_report
+
+        page = write_report(out, pictures=False).read_text()
+        assert "coiling (hybrid)" in page and "settled there in" in page
+        assert (out / "figures" / "coiling_forces.png").is_file()
 
     again = run(config, out, phases=("coiling",), resume=True, progress=False)
     assert again["coiling"]["measures"]["strain_energy_total"]["computed"] == pytest.approx(

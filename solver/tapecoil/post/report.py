@@ -128,12 +128,24 @@ def _run_table(summary: dict) -> str:
             continue
         p, run = summary[phase], summary[phase]["run"]
         state = "completed" if p["completed"] else html.escape(p["message"] or "stopped")
+        name = f"{phase} (hybrid)" if run.get("model") == "hybrid" else phase
         lines.append(
-            f"<tr><td>{phase}</td><td>{state}</td><td>{run['mesh']}</td><td>{run['dofs']:,}</td>"
+            f"<tr><td>{name}</td><td>{state}</td><td>{run['mesh']}</td><td>{run['dofs']:,}</td>"
             f"<td>{run['ranks']}</td><td>{run['steps']}</td><td>{run['newton_iterations']:,}</td>"
             f"<td>{run['wall_time']:.1f} s</td></tr>"
         )
     lines.append("</table>")
+    settling = summary.get("coiling", {}).get("run", {}).get("settling")
+    if settling:
+        lines.append(
+            "<p>Coiled by the shell-beam hybrid (its DOFs above at their most), whose coiled "
+            "configuration was carried into the full shell and settled there in "
+            f"{settling['newton_iterations']} Newton iterations: strain energy "
+            f"{settling['strain_energy_hybrid']:.6g} J in the hybrid, "
+            f"{settling['strain_energy_settled']:.6g} J settled, the nodes moved by at most "
+            f"{1e3 * settling['largest_displacement']:.3g} mm. The stowed state, the coil's measures "
+            "and the deployment are the full shell's.</p>"
+        )
     return "\n".join(lines)
 
 
