@@ -56,7 +56,9 @@ class BeamDynamics:
     ``line_density``: rho_A [kg/m]; ``rotary_inertia``: J1, J2, J3 [kg m], the section's mass
     moments of inertia per unit length about the tangent and its axes 2 and 3. ``rho_inf``: the
     scheme's high-frequency spectral radius (1: the trapezoidal rule). :meth:`step` takes one time
-    step; :meth:`kinetic_energy` and :meth:`momenta` read the motion from the velocities.
+    step of the beam alone; ``forms`` are its residual and Jacobian for a joint solve
+    (:mod:`tapecoil.phases.hybrid_motion`); :meth:`kinetic_energy` and :meth:`momenta` read the
+    motion from the velocities.
     """
 
     def __init__(
@@ -89,18 +91,9 @@ class BeamDynamics:
         ) * model.dx
         residual, _ = problem.forms()
         F = self.inertia_form + scheme.force_average(residual)
-        self.solver = SNESSolver(
-            F,
-            ufl.derivative(F, model.q, ufl.TrialFunction(model.W)),
-            model.q,
-            problem.bcs,
-            prefix=f"{problem.name}_dynamics_",
-            options={"pc_factor_mat_solver_type": "mumps", "pc_type": "lu"},
-            rtol=rtol,
-            atol=1e-12,
-            state_scale=model.rounding_scale(),
-        )
-        self.solver.point_forces = problem.point_forces
+        self.forms = (F, ufl.derivative(F, model.q, ufl.TrialFunction(model.W)))
+        self.rtol = rtol
+        self.solver = None  # the beam's own, for steps of the beam alone
         self.time = 0.0
         V = model.W
         self._velocity = dolfinx.fem.Function(V)
@@ -129,6 +122,18 @@ class BeamDynamics:
         """One time step of ``dt`` [s]; returns the solve's result (its state kept only when it
         converged: then the beam's rotations are committed and the rates moved on)."""
         scheme, model = self.scheme, self.model
+        if self.solver is None:
+            self.solver = SNESSolver(
+                *self.forms,
+                model.q,
+                self.problem.bcs,
+                prefix=f"{self.problem.name}_dynamics_",
+                options={"pc_factor_mat_solver_type": "mumps", "pc_type": "lu"},
+                rtol=self.rtol,
+                atol=1e-12,
+                state_scale=model.rounding_scale(),
+            )
+            self.solver.point_forces = self.problem.point_forces
         scheme.set_step(dt)
         start = model.q.x.array.copy()
         scheme.predict(dt)
@@ -139,9 +144,14 @@ class BeamDynamics:
             return result
         scheme.advance()
         model.commit()  # theta back to zero: the next step's start
-        scheme.q_old.x.array[model._theta_dofs] = 0.0
+        self.committed()
         self.time += dt
         return result
+
+    def committed(self) -> None:
+        """After the scheme has advanced and the beam committed its rotations: the scheme's
+        previous rotation (the next step's start) is zero."""
+        self.scheme.q_old.x.array[self.model._theta_dofs] = 0.0
 
     def kinetic_energy(self) -> float:
         """(1/2) rho_A |u'|^2 + (1/2) w.I w over the beam [J], from the velocities (collective)."""

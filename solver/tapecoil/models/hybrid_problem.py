@@ -118,11 +118,15 @@ class HybridProblem:
         self.beam._predict(load_from, load_to)
         self.shell.predict(load_from, load_to)
 
-    def _solver(self, F_s, J_s, settings: SolverConfig, options: dict | None) -> CoupledSNESSolver:
-        """The joint Newton solver of the shell's forms ``F_s``, ``J_s`` and the beam's."""
+    def _solver(
+        self, F_s, J_s, settings: SolverConfig, options: dict | None, beam_forms: tuple | None = None
+    ) -> CoupledSNESSolver:
+        """The joint Newton solver of the shell's forms ``F_s``, ``J_s`` and the beam's (its
+        energy's, or ``beam_forms``: its equation of motion, say)."""
+        beam_forms = beam_forms or self.beam.forms()
         blocks = [
             Block(F, J, part.model.q, part.bcs, part.point_forces, part.model.rounding_scale())
-            for part, (F, J) in ((self.shell, (F_s, J_s)), (self.beam, self.beam.forms()))
+            for part, (F, J) in ((self.shell, (F_s, J_s)), (self.beam, beam_forms))
         ]
         return CoupledSNESSolver(
             blocks,

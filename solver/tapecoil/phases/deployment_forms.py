@@ -55,12 +55,10 @@ class DeploymentForms:
         # the conserving scheme's director velocity at the quadrature points (restart state)
         self.director_rate = None
 
-    def alpha(self, hold):
-        """Residual, Jacobian and kinetic energy density of generalized-alpha (rho_inf < 1).
-
-        The equation of motion at the generalized-alpha levels, internal forces averaged between
-        the two states (:meth:`GeneralizedAlpha.force_average`).
-        """
+    def alpha_forms(self, forces):
+        """Residual and Jacobian of generalized-alpha: the inertia at the scheme's levels plus
+        ``forces`` (a residual form of the shell's state: its averaged internal forces and
+        whatever acts besides)."""
         model, ti = self.model, self.integrator
         dA = model.jacobian
         du, dtheta = split_state(model.dq)
@@ -70,7 +68,7 @@ class DeploymentForms:
         Dd_f, _, d_ddot = director_rates(model, theta_f, v_theta, a_theta)
         translational = self.translational * ufl.dot(a_u, du) * dA * model.dx
         rotary = self.rotary * ufl.dot(d_ddot, ufl.dot(Dd_f, dtheta)) * dA * model.dx
-        F = translational + rotary + ti.force_average(self.internal) + hold
+        F = translational + rotary + forces
 
         # The Jacobian is exact but for the rotary inertia, linearised as its mass term alone
         # (rho h^3/12 Dd^T Dd (1 - alpha_m)/(beta dt^2)): its other parts (the turning of Dd,
@@ -84,7 +82,16 @@ class DeploymentForms:
         rotary_mass = (
             rotary_mass * ufl.dot(ufl.dot(Dd_f, dtheta_trial), ufl.dot(Dd_f, dtheta)) * dA * model.dx
         )
-        J = ufl.derivative(F - rotary, model.q, trial) + rotary_mass
+        return F, ufl.derivative(F - rotary, model.q, trial) + rotary_mass
+
+    def alpha(self, hold):
+        """Residual, Jacobian and kinetic energy density of generalized-alpha (rho_inf < 1).
+
+        The equation of motion at the generalized-alpha levels, internal forces averaged between
+        the two states (:meth:`GeneralizedAlpha.force_average`).
+        """
+        model, ti = self.model, self.integrator
+        F, J = self.alpha_forms(ti.force_average(self.internal) + hold)
 
         # kinetic energy of the current state (velocity: the integrator's latest)
         v_u, v_theta = split_state(ti.v_old)
