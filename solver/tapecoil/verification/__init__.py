@@ -20,6 +20,7 @@ CASES = (
     "hybrid-fold",
     "hybrid-window",
     "hybrid-coil",
+    "hybrid-vibration",
 )
 
 

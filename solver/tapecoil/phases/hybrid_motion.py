@@ -1,0 +1,83 @@
+"""The shell-beam hybrid in time: a :class:`~tapecoil.models.hybrid_problem.HybridProblem`'s
+shell and beam stepped together by generalized-alpha in one Newton solve.
+
+The shell's equation of motion is the deployment's (:mod:`tapecoil.phases.deployment_forms`: its
+consistent inertia at the scheme's levels, its internal forces averaged between the step's
+ends), the beam's is :mod:`tapecoil.models.beam_dynamics`'s, and the ties join them as in a
+static solve, their penalty taken at the step's end (a constraint, as the supports are). Both
+schemes share rho_inf and the step. After a converged step each scheme moves on and the hybrid
+commits (the ties' frames, the beam's rotations), and the beam's scheme starts its next step
+from a zero rotation.
+"""
+
+from __future__ import annotations
+
+from tapecoil.config import SolverConfig, TapeConfig
+from tapecoil.core.timeint import GeneralizedAlpha
+from tapecoil.models.beam_dynamics import BeamDynamics
+from tapecoil.phases.deployment_forms import DeploymentForms
+
+__all__ = ["HybridMotion"]
+
+
+class HybridMotion:
+    """``hybrid``'s shell and beam in time (see the module), from the state they are in, at
+    rest. ``tape``: the shell's wall (its density and thickness give the inertia per unit area);
+    ``line_density`` [kg/m] and ``rotary_inertia`` (J1, J2, J3) [kg m] the beam's. The loads
+    are those of the hybrid's load parameter as it stands (:meth:`set_load` changes it).
+    :meth:`step` takes one step."""
+
+    def __init__(
+        self,
+        hybrid,
+        tape: TapeConfig,
+        line_density: float,
+        rotary_inertia,
+        rho_inf: float = 0.9,
+        settings: SolverConfig | None = None,
+        options: dict | None = None,
+    ):
+        self.hybrid = hybrid
+        shell = hybrid.shell
+        self.shell_scheme = GeneralizedAlpha(shell.model.q, rho_inf)
+        inertia = DeploymentForms(
+            shell.model, self.shell_scheme, None, tape, energy=shell.model.strain_energy
+        )
+        F_static, _ = shell.forms()
+        F_s, J_s = inertia.alpha_forms(self.shell_scheme.force_average(F_static))
+        self.beam = BeamDynamics(hybrid.beam, line_density, rotary_inertia, rho_inf=rho_inf)
+        self.settings = settings or SolverConfig()
+        self.solver = hybrid._solver(F_s, J_s, self.settings, options, beam_forms=self.beam.forms)
+        self.time = 0.0
+
+    def set_load(self, value: float) -> None:
+        """The hybrid's load parameter (its loads per unit load) from now on."""
+        self.hybrid._set_load(value)
+        self.hybrid.beam.committed_load = value
+
+    def step(self, dt: float):
+        """One step of ``dt`` [s]; the states stay where they were unless it converged."""
+        schemes = (self.shell_scheme, self.beam.scheme)
+        states = [s.q.x.array.copy() for s in schemes]
+        for scheme in schemes:
+            scheme.set_step(dt)
+            scheme.predict(dt)
+        result = self.solver.solve()
+        if not result.converged:
+            for scheme, state in zip(schemes, states, strict=True):
+                scheme.q.x.array[:] = state
+                scheme.q.x.scatter_forward()
+            return result
+        for scheme in schemes:
+            scheme.advance()
+        self.hybrid._commit()
+        self.beam.committed()
+        self.time += dt
+        return result
+
+    def kinetic_energy(self) -> float:
+        """The beam's kinetic energy [J] (collective); the shell's is the deployment's measure."""
+        return self.beam.kinetic_energy()
+
+    def destroy(self) -> None:
+        self.solver.destroy()
