@@ -172,6 +172,19 @@ class HubTurningPhase(Phase):
     def write_checkpoint(self, path: Path, meta: dict) -> None:
         write_checkpoint(self.model, path, meta)
 
+    def coiling_summary(self, interrupted, t_start: float, measures: dict) -> dict:
+        """A coiling's summary: its state, hub angles, ``measures`` and run figures (the steps
+        of the hub's turning counted)."""
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "hub_angle": self.model.root.angle,
+            "target_hub_angle": self.target,
+            "measures": measures,
+            "run": self.run_figures(len([r for r in self.history if r["phase"] == "coil"]), t_start),
+        }
+
     def run_figures(self, steps: int, t_start: float) -> dict:
         """The summary's "run": ranks, DOFs, mesh, ``steps`` (the phase's own count), Newton
         iterations, penetration, wall times and the cost of an iteration."""
@@ -252,15 +265,7 @@ class CoilingPhase(HubTurningPhase):
         torque = hub_torque_measure(self.history)
         if torque is not None:
             measures["hub_torque"] = torque
-        return {
-            "completed": self.completed,
-            "message": self.message,
-            "interrupted": None if interrupted is None else interrupted.name,
-            "hub_angle": self.model.root.angle,
-            "target_hub_angle": self.target,
-            "measures": measures,
-            "run": self.run_figures(len([r for r in self.history if r["phase"] == "coil"]), t_start),
-        }
+        return self.coiling_summary(interrupted, t_start, measures)
 
 
 def write_coiled_cells(model: CoilingModel, directory: Path) -> dict:

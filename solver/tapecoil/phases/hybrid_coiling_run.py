@@ -201,15 +201,7 @@ class HybridCoilingPhase(HubTurningPhase):
         if last is not None:
             hybrid.update(coiled_length=last["coiled_length"], outer_radius=last["outer_radius"])
         measures["hybrid"] = hybrid
-        return {
-            "completed": self.completed,
-            "message": self.message,
-            "interrupted": None if interrupted is None else interrupted.name,
-            "hub_angle": self.model.root.angle,
-            "target_hub_angle": self.target,
-            "measures": measures,
-            "run": self.run_figures(len([r for r in self.history if r["phase"] == "coil"]), t_start),
-        }
+        return self.coiling_summary(interrupted, t_start, measures)
 
 
 def settle(model: CoilingModel, angle: float) -> dict:
