@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass, field
 
 from tapecoil.config.laminate import LaminateConfig
+from tapecoil.config.model import ModelConfig, check_model
 from tapecoil.config.params import NON_NEGATIVE, POSITIVE, ConfigError, Range, check_section, param
 
 
@@ -122,32 +123,6 @@ class CoilingConfig:
     max_step: float = param(0.0, "rad", Range(0.0, math.pi))
     sense: str = param("opposite", "", ("opposite", "equal"))
     petsc_options: dict = param({}, "")
-
-
-@dataclass
-class ModelConfig:
-    """The tape's structural model in coiling.
-
-    Attributes:
-        kind: 'shell' (the Naghdi shell over the whole tape) or 'hybrid' (shell on a window
-            around the ploy region, geometrically exact beams before and after it:
-            docs/hybrid.md). The hybrid coils in the opposite sense on the spiral of turns
-            (contact.turns = 'spiral'), on an ungraded mesh (mesh.grading = 1). Its coiled state
-            is carried into the full shell and settled there by one solve at the final hub
-            angle: the stowed state, and the deployment from it, are the full shell's.
-        window_ahead: the hybrid's shell beyond the lift-off point [m] (the ploy region and a
-            margin).
-        window_behind: the hybrid's shell on the coil behind the lift-off point [m].
-        window_move: how far the lift-off travels before the window moves with it [m].
-        tie_penalty: the penalty factor of the ties between shell and beams [-] (times the
-            stiffness of one shell element).
-    """
-
-    kind: str = param("shell", "", ("shell", "hybrid"))
-    window_ahead: float = param(0.15, "m", POSITIVE)
-    window_behind: float = param(0.025, "m", POSITIVE)
-    window_move: float = param(0.025, "m", POSITIVE)
-    tie_penalty: float = param(1e2, "-", POSITIVE)
 
 
 @dataclass
@@ -452,44 +427,9 @@ class Config:
             )
 
     def check_model(self) -> None:
-        """Refuse what the hybrid model cannot do (part of :meth:`check`), and its window's
-        settings on the shell model, where they would not act."""
-        model = self.model
-        if model.kind == "shell":
-            defaults = ModelConfig()
-            for f in dataclasses.fields(model):
-                if f.name != "kind" and getattr(model, f.name) != getattr(defaults, f.name):
-                    raise ConfigError(
-                        f"model.{f.name} acts only on the hybrid model: set model.kind = 'hybrid', or "
-                        f"leave model.{f.name} out"
-                    )
-            return
-        needs = (
-            (
-                self.coiling.sense == "opposite",
-                "coiling.sense = 'opposite'",
-                "the hybrid coils in that sense only",
-            ),
-            (
-                self.contact.turns == "spiral",
-                "contact.turns = 'spiral'",
-                "its beams rest on the spiral of turns",
-            ),
-            (
-                self.mesh.grading == 1.0,
-                "mesh.grading = 1",
-                "its shell and beams share their nodes along the tape",
-            ),
-        )
-        for ok, setting, why in needs:
-            if not ok:
-                raise ConfigError(f"model.kind = 'hybrid' needs {setting}: {why}")
-        window = model.window_ahead + model.window_behind
-        if window >= self.tape.L:
-            raise ConfigError(
-                f"model.window_ahead + model.window_behind = {window:g} m must be shorter than the tape "
-                f"(tape.L = {self.tape.L:g} m): the hybrid's shell is a window of it"
-            )
+        """Refuse what the hybrid model cannot do (part of :meth:`check`;
+        :func:`tapecoil.config.model.check_model`)."""
+        check_model(self)
 
     def coiling_warnings(self) -> list[str]:
         """What is likely to keep a coiling run from its goal: a message per finding, naming its key.

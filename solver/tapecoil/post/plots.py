@@ -138,7 +138,8 @@ def coiling_forces(directory: Path) -> Path | None:
     if "hub_torque_reaction" in h:
         ax[1].plot(angle, h["hub_torque_reaction"] * 1e3, "-", label="shell (the root's reactions)")
     ax[1].plot(angle, steady * 1e3, "--", label="steady coiling r (T + b w(r))")
-    ax[1].set(xlabel="hub angle [rad]", ylabel="hub torque [N mm]", title="hub torque")
+    title = "hub torque" if "hub_torque" in h else "hub torque (not measured by the hybrid)"
+    ax[1].set(xlabel="hub angle [rad]", ylabel="hub torque [N mm]", title=title)
     return _save(fig, figures / "coiling_forces.png")
 
 

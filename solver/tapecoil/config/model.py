@@ -1,0 +1,77 @@
+"""The [model] table: the tape's structural model in coiling, and what the hybrid needs of
+the other tables."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from tapecoil.config.params import POSITIVE, ConfigError, param
+
+
+@dataclass
+class ModelConfig:
+    """The tape's structural model in coiling.
+
+    Attributes:
+        kind: 'shell' (the Naghdi shell over the whole tape) or 'hybrid' (shell on a window
+            around the ploy region, geometrically exact beams before and after it:
+            docs/hybrid.md). The hybrid coils in the opposite sense on the spiral of turns
+            (contact.turns = 'spiral'), on an ungraded mesh (mesh.grading = 1). Its coiled state
+            is carried into the full shell and settled there by one solve at the final hub
+            angle: the stowed state, and the deployment from it, are the full shell's.
+        window_ahead: the hybrid's shell beyond the lift-off point [m] (the ploy region and a
+            margin).
+        window_behind: the hybrid's shell on the coil behind the lift-off point [m].
+        window_move: how far the lift-off travels before the window moves with it [m].
+        tie_penalty: the penalty factor of the ties between shell and beams [-] (times the
+            stiffness of one shell element).
+    """
+
+    kind: str = param("shell", "", ("shell", "hybrid"))
+    window_ahead: float = param(0.15, "m", POSITIVE)
+    window_behind: float = param(0.025, "m", POSITIVE)
+    window_move: float = param(0.025, "m", POSITIVE)
+    tie_penalty: float = param(1e2, "-", POSITIVE)
+
+
+def check_model(config) -> None:
+    """Refuse what the hybrid model cannot do in ``config`` (a :class:`~tapecoil.config.Config`),
+    naming the key to change, and the window's settings on the shell model, where they would
+    not act."""
+    model = config.model
+    if model.kind == "shell":
+        defaults = ModelConfig()
+        for f in dataclasses.fields(model):
+            if f.name != "kind" and getattr(model, f.name) != getattr(defaults, f.name):
+                raise ConfigError(
+                    f"model.{f.name} acts only on the hybrid model: set model.kind = 'hybrid', or "
+                    f"leave model.{f.name} out"
+                )
+        return
+    needs = (
+        (
+            config.coiling.sense == "opposite",
+            "coiling.sense = 'opposite'",
+            "the hybrid coils in that sense only",
+        ),
+        (
+            config.contact.turns == "spiral",
+            "contact.turns = 'spiral'",
+            "its beams rest on the spiral of turns",
+        ),
+        (
+            config.mesh.grading == 1.0,
+            "mesh.grading = 1",
+            "its shell and beams share their nodes along the tape",
+        ),
+    )
+    for ok, setting, why in needs:
+        if not ok:
+            raise ConfigError(f"model.kind = 'hybrid' needs {setting}: {why}")
+    window = model.window_ahead + model.window_behind
+    if window >= config.tape.L:
+        raise ConfigError(
+            f"model.window_ahead + model.window_behind = {window:g} m must be shorter than the tape "
+            f"(tape.L = {config.tape.L:g} m): the hybrid's shell is a window of it"
+        )
