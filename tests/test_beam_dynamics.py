@@ -12,6 +12,7 @@ from tapecoil.models.beam_dynamics import BeamDynamics
 from tapecoil.models.beam_problem import BeamProblem
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.verification.beam import fixed_frame, straight_line
+from tapecoil.verification.hybrid_motion import cantilever_period, crossing_period
 
 # a steel strip 20 mm wide and 2 mm deep, 1 m long: slender (L / depth = 500), so that shear
 # and rotary inertia move its first frequency by about (depth / L)^2, far below the tolerances
@@ -48,8 +49,8 @@ def cantilever_vibration(comm, periods: float = 3.0, per_period: int = 100) -> t
 
 
 def euler_bernoulli_period() -> float:
-    """2 pi / omega_1, omega_1 = 1.8751^2 sqrt(E I / (rho A L^4)): the first mode of a cantilever."""
-    return 2 * math.pi / (1.875104**2 * math.sqrt(E * I2 / (DENSITY * AREA * LENGTH**4)))
+    """The strip's first period as a cantilever by Euler-Bernoulli."""
+    return cantilever_period(E * I2, DENSITY * AREA, LENGTH)
 
 
 def test_a_cantilever_swings_at_euler_bernoullis_first_frequency():
@@ -58,12 +59,7 @@ def test_a_cantilever_swings_at_euler_bernoullis_first_frequency():
     trapezoidal rule at 100 steps per period lengthening it by (omega dt)^2 / 12 = 3.3e-4 at
     most; and no amplitude lost (rho_inf = 1), the last period's within 1 % of the start's."""
     times, tips = cantilever_vibration(MPI.COMM_WORLD)
-    crossings = [
-        times[i] - tips[i] * (times[i + 1] - times[i]) / (tips[i + 1] - tips[i])
-        for i in range(len(tips) - 1)
-        if tips[i] * tips[i + 1] < 0
-    ]
-    period = 2 * float(np.mean(np.diff(crossings)))
+    period = crossing_period(times, tips)
     assert period == pytest.approx(euler_bernoulli_period(), rel=1e-3)
     assert np.abs(tips[-100:]).max() == pytest.approx(1e-3, rel=1e-2)
 

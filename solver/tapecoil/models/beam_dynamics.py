@@ -28,23 +28,24 @@ import ufl
 
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.timeint import GeneralizedAlpha
-from tapecoil.models.beam import SERIES_BELOW, rotation
+from tapecoil.models.beam import SERIES_BELOW, _rodrigues_coefficients, _skew, rotation
 
 __all__ = ["BeamDynamics", "left_jacobian"]
 
 
 def left_jacobian(theta):
     """T(theta) = I + f2 Theta + f3 Theta^2 (UFL), the spatial spin of a variation of the rotation
-    vector theta: d exp(theta^) = (T dtheta)^ exp(theta^); regular at theta = 0."""
+    vector theta: d exp(theta^) = (T dtheta)^ exp(theta^); regular at theta = 0 (f2 is
+    Rodrigues' coefficient of the beam's rotation, f3 = (a - sin a)/a^3)."""
     a2 = ufl.dot(theta, theta)
+    _, f2 = _rodrigues_coefficients(a2)
     small = ufl.lt(a2, SERIES_BELOW)
     safe = ufl.conditional(small, 1.0, a2)
     a = ufl.sqrt(safe)
-    f2 = ufl.conditional(small, 0.5 - a2 / 24 + a2**2 / 720 - a2**3 / 40320, 2 * ufl.sin(a / 2) ** 2 / safe)
     f3 = ufl.conditional(
         small, 1 / 6 - a2 / 120 + a2**2 / 5040 - a2**3 / 362880, (a - ufl.sin(a)) / (a * safe)
     )
-    T = ufl.as_matrix([[0, -theta[2], theta[1]], [theta[2], 0, -theta[0]], [-theta[1], theta[0], 0]])
+    T = _skew(theta)
     return ufl.Identity(3) + f2 * T + f3 * T * T
 
 
@@ -82,8 +83,9 @@ class BeamDynamics:
         spin_rate = ufl.as_vector([a_m[i] for i in range(3, 6)])
         spin = ufl.as_vector([v_f[i] for i in range(3, 6)])
         theta_f = (1 - p.alpha_f) * model.theta  # the previous theta is zero: a step's start
+        section_inertia = ufl.diag(ufl.as_vector([float(j) for j in J]))
         frame = rotation(theta_f) * model.frame_n
-        inertia = frame * ufl.diag(ufl.as_vector([float(j) for j in J])) * frame.T
+        inertia = frame * section_inertia * frame.T
         moment = inertia * spin_rate + ufl.cross(spin, inertia * spin)
         self.inertia_form = (
             self.line_density * ufl.dot(acceleration, du)
@@ -99,7 +101,7 @@ class BeamDynamics:
         self._velocity = dolfinx.fem.Function(V)
         u, theta = ufl.split(self._velocity)
         frame_now = model.frame_n  # at a step's start, the current frame
-        inertia_now = frame_now * ufl.diag(ufl.as_vector([float(j) for j in J])) * frame_now.T
+        inertia_now = frame_now * section_inertia * frame_now.T
         self._kinetic = dolfinx.fem.form(
             (0.5 * self.line_density * ufl.dot(u, u) + 0.5 * ufl.dot(theta, inertia_now * theta)) * model.dx
         )

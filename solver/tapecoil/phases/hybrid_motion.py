@@ -75,9 +75,5 @@ class HybridMotion:
         self.time += dt
         return result
 
-    def kinetic_energy(self) -> float:
-        """The beam's kinetic energy [J] (collective); the shell's is the deployment's measure."""
-        return self.beam.kinetic_energy()
-
     def destroy(self) -> None:
         self.solver.destroy()

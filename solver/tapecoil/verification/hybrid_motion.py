@@ -37,11 +37,29 @@ PER_PERIOD = 40  # steps per Euler-Bernoulli period
 PERIODS = 2.5  # the motion followed: four zero crossings
 
 
+def cantilever_period(EI: float, line_density: float, length: float) -> float:
+    """Euler-Bernoulli's first period [s] of a cantilever: 2 pi / (1.8751^2 sqrt(EI / (rho_A
+    L^4))), EI [N m^2], rho_A [kg/m], L [m]."""
+    return 2 * math.pi / (1.875104**2 * math.sqrt(EI / (line_density * length**4)))
+
+
 def euler_bernoulli_period(config: Config) -> float:
     """The first period [s] of the tape's cantilever by Euler-Bernoulli, the arc's EI."""
     tp = config.tape
-    EI = tp.E * theory.arc_second_moment(tp.R, tp.alpha, tp.h)
-    return 2 * math.pi / (1.875104**2 * math.sqrt(EI / (tp.rho_l * CANTILEVER_LENGTH**4)))
+    return cantilever_period(
+        tp.E * theory.arc_second_moment(tp.R, tp.alpha, tp.h), tp.rho_l, CANTILEVER_LENGTH
+    )
+
+
+def crossing_period(times: np.ndarray, values: np.ndarray) -> float | None:
+    """Twice the mean time [s] between the zero crossings of ``values`` at ``times`` (linear
+    between the samples); None before two crossings."""
+    crossings = [
+        times[i] - values[i] * (times[i + 1] - times[i]) / (values[i + 1] - values[i])
+        for i in range(len(values) - 1)
+        if values[i] * values[i + 1] < 0
+    ]
+    return 2 * float(np.mean(np.diff(crossings))) if len(crossings) > 1 else None
 
 
 def swing(
@@ -82,16 +100,11 @@ def swing(
     finally:
         motion.destroy()
     times, tips = np.array(times), np.array(tips)
-    crossings = [
-        times[i] - tips[i] * (times[i + 1] - times[i]) / (tips[i + 1] - tips[i])
-        for i in range(len(tips) - 1)
-        if tips[i] * tips[i + 1] < 0
-    ]
     return {
         "times": times,
         "tips": tips,
         "static": static,
-        "period": 2 * float(np.mean(np.diff(crossings))) if len(crossings) > 1 else None,
+        "period": crossing_period(times, tips),
         "amplitude_last_period": float(np.abs(tips[-per_period:]).max()),
         "steps": len(times),
         "newton_iterations": iterations,
