@@ -89,7 +89,7 @@ def test_two_ranks_coil_the_hybrid_as_one():
     assert abs(s2 - s1) < 1e-9 * 0.5
 
 
-def test_a_run_with_the_hybrid_model_stows_and_deploys_the_full_shell(tmp_path):
+def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path):
     """A run with ``model.kind = "hybrid"`` (coarse, 4.5 rad: the window leaves the root once;
     2 ms of deployment): the coiling's summary names its measures as the shell's does, the
     hybrid's own strain energy is within 0.5 % of the settled full shell's (measured 0.05 % at 5
@@ -127,8 +127,17 @@ def test_a_run_with_the_hybrid_model_stows_and_deploys_the_full_shell(tmp_path):
     assert history["window_start"][-1] > 0.0 and np.all(np.isfinite(history["strain_energy"]))
     meta = read_meta(out / "stowed")
     assert meta["completed"] and meta["run"]["model"] == "hybrid"
-    assert summary["deployment"]["time"] == pytest.approx(2e-3)
-    assert (out / "snapshots").is_dir()
+    deployment = summary["deployment"]
+    assert deployment["time"] == pytest.approx(2e-3) and deployment["run"]["model"] == "hybrid"
+    assert deployment["run"]["dofs"] < figures["full_shell_dofs"]
+    history = read_history(out / "deployment_history.csv")
+    for column in ("lambda", "strain_energy", "contact_energy", "kinetic_energy", "dissipated_energy"):
+        assert np.all(np.isfinite(history[column])), column
+    # the release: the tape starts to move, its energy turned into motion, not made
+    assert history["kinetic_energy"][-1] > 0.0
+    assert history["strain_energy"][-1] < history["strain_energy"][0]
+    assert abs(history["dissipated_energy"][-1]) < 1e-2 * history["strain_energy"][0]
+    assert (out / "snapshots").is_dir() and read_meta(out / "deployed")["run"]["model"] == "hybrid"
 
     if MPI.COMM_WORLD.rank == 0:  # the report's figures from the hybrid's history, and its note
         from tapecoil.post.report import write_report
@@ -142,4 +151,8 @@ def test_a_run_with_the_hybrid_model_stows_and_deploys_the_full_shell(tmp_path):
         settled, rel=1e-12
     )
     assert again["coiling"]["run"]["steps"] == figures["steps"]
+    # a completed hybrid deployment is not recomputed either
+    resumed = run(config, out, resume=True, progress=False)
+    assert resumed["deployment"]["run"]["steps"] == deployment["run"]["steps"]
+    assert resumed["deployment"]["measures"]["lambda0"] == deployment["measures"]["lambda0"]
     assert json.loads((out / "summary.json").read_text())["coiling"]["run"]["model"] == "hybrid"

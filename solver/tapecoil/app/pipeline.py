@@ -44,11 +44,18 @@ def run(
     """
     from tapecoil.phases.coiling_run import run_coiling
     from tapecoil.phases.deployment_run import run_deployment
-    from tapecoil.phases.hybrid_coiling_run import run_hybrid_coiling
+    from tapecoil.phases.hybrid_coiling_run import coil_again, run_hybrid_coiling
+    from tapecoil.phases.hybrid_deployment_run import run_hybrid_deployment
     from tapecoil.phases.payout import run_payout
 
     if "deployment" in phases and "payout" in phases:
         raise ValueError("a run deploys the stowed tape or pays it out, not both")
+    hybrid = config.model.kind == "hybrid"
+    if hybrid and "deployment" in phases and "coiling" not in phases:
+        raise ValueError(
+            "model.kind = 'hybrid' deploys the tape its own coiling left, in the same run: run "
+            "both phases (tapecoil run), or set model.kind = 'shell' to deploy a stowed checkpoint"
+        )
     started = time.perf_counter()
     directory = results.prepare_directory(directory, config, comm)
     own_stowed, own_deployed = directory / "stowed", directory / "deployed"
@@ -59,16 +66,40 @@ def run(
         )
         out: dict = {}
         with StopSignals() as stop:
-            model = None
+            model = hybrid_coiling = None
             if "coiling" in phases:
                 resume_coil = coiling_checkpoint or (
                     own_stowed if resume and is_checkpoint(own_stowed) else None
                 )
-                coil = run_hybrid_coiling if config.model.kind == "hybrid" else run_coiling
-                out["coiling"], model = coil(
-                    config, directory, comm, resume=resume_coil, progress=progress, stop=stop
+                coiling_args = (config, directory, comm)
+                coiling_kwargs = {"resume": resume_coil, "progress": progress, "stop": stop}
+                if hybrid:
+                    out["coiling"], model, hybrid_coiling = run_hybrid_coiling(
+                        *coiling_args, **coiling_kwargs
+                    )
+                else:
+                    out["coiling"], model = run_coiling(*coiling_args, **coiling_kwargs)
+            deploying = "deployment" in phases and (model is None or out["coiling"]["completed"])
+            if deploying and hybrid:
+                resume_deployment = _own_checkpoint(own_deployed, "deployment") if resume else None
+                done = resume_deployment is not None and read_meta(resume_deployment).get("completed")
+                if hybrid_coiling is None and not done:
+                    results.LOG.warning(
+                        "the hybrid's deployment starts from the hybrid's own coiled state, which "
+                        "the stowed checkpoint does not hold: coiling with the hybrid again"
+                    )
+                    hybrid_coiling = coil_again(config, comm)
+                out["deployment"] = run_hybrid_deployment(
+                    config,
+                    directory,
+                    model,
+                    hybrid_coiling,
+                    comm,
+                    progress=progress,
+                    stop=stop,
+                    resume=resume_deployment,
                 )
-            if "deployment" in phases and (model is None or out["coiling"]["completed"]):
+            elif deploying:
                 out["deployment"], _ = run_deployment(
                     config,
                     directory,

@@ -211,6 +211,14 @@ def lift_off(tape, gap_factor: float = LIFT_OFF_GAP) -> dict[str, float]:
     columns = (xi[0], gap[:n_owned], obstacle[:n_owned])
     rows = np.vstack(tape.comm.allgather(np.column_stack([col[centre] for col in columns])))
     s, g, r = rows[np.argsort(rows[:, 0])].T
+    coiled = coiled_length(s, g, r, G)
+    return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+
+
+def coiled_length(s: np.ndarray, g: np.ndarray, r: np.ndarray, G: float) -> float:
+    """The coiled length [m] of :func:`lift_off` from the centre line's points in order along
+    the tape: their material coordinates ``s`` [m], their inner faces' gaps ``g`` [m] to the
+    obstacle beneath, of radius ``r`` [m], and the gap G [m] within which a point is on the coil."""
     on = np.nonzero(g <= G)[0]
     if len(on) == 0:
         coiled = 0.0
@@ -221,7 +229,7 @@ def lift_off(tape, gap_factor: float = LIFT_OFF_GAP) -> dict[str, float]:
         w = (G - g[i]) / (g[i + 1] - g[i])
         tangent = math.sqrt((r[i] + G) ** 2 - r[i] ** 2)
         coiled = max(float(s[i] + w * (s[i + 1] - s[i])) - tangent, 0.0)
-    return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+    return coiled
 
 
 def root_load_peaks(history: list[dict], end_lambda: float = 0.9) -> dict:

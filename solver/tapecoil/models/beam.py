@@ -170,6 +170,7 @@ class GeometricallyExactBeam:
             return dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, element), name=name)
 
         self.frame_n = at_quadrature((3, 3), "frame_n")  # Lambda_n
+        self.frame_0 = at_quadrature((3, 3), "frame_0")  # Lambda_0, the reference
         self.curvature_n = at_quadrature((3,), "curvature_n")  # K_n
         self.curvature_0 = at_quadrature((3,), "curvature_0")  # K_0, stress-free
         self.strain_0 = at_quadrature((3,), "strain_0")  # Gamma_0 = Lambda_0^T X', stress-free
@@ -182,6 +183,7 @@ class GeometricallyExactBeam:
         x = self._at_points(dolfinx.fem.Expression(ufl.SpatialCoordinate(mesh), points)).reshape(-1, 3).T
         F0, K0 = _frames_with_curvature(frame, x, 1e-6 * size)
         _store(self.frame_n, F0)
+        _store(self.frame_0, F0)
         _store(self.curvature_0, K0)
         _store(self.curvature_n, K0)
         J = ufl.Jacobian(mesh)
@@ -264,9 +266,10 @@ class GeometricallyExactBeam:
 
     def quadrature_values(self, name: str) -> np.ndarray:
         """At the quadrature points of every local cell, in order: their reference positions
-        (``"points"``, (n, 3) [m]), the committed frames (``"frame_n"``, (n, 9)) or curvatures
-        (``"curvature_n"``, (n, 3) [1/m])."""
+        (``"points"``, (n, 3) [m]), the committed frames (``"frame_n"``, (n, 9)), the reference
+        frames (``"frame_0"``) or the committed curvatures (``"curvature_n"``, (n, 3) [1/m])."""
         fields = {"points": (ufl.SpatialCoordinate(self.mesh), 3), "frame_n": (self.frame_n, 9)}
+        fields["frame_0"] = (self.frame_0, 9)
         fields["curvature_n"] = (self.curvature_n, 3)
         expression, size = fields[name]
         points = compat.interpolation_points(self.frame_n.function_space)

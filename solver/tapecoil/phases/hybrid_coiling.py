@@ -164,9 +164,17 @@ class HybridCoiling:
         return start, min(start + self.window_length, self.config.tape.L)
 
     def _build(self, start: float) -> HybridProblem:
+        return self.build(start, f"hybrid_coil{len(self.moves)}")
+
+    def build(
+        self, start: float, name: str, released: bool = False, end: float | None = None
+    ) -> HybridProblem:
+        """A hybrid of this coiling's tape, hub and settings with its window from ``start`` [m]
+        along the tape (to ``end`` [m], by default the window's length on), in its reference
+        state; PETSc options under ``name + "_"``. ``released``: the free end let go (a
+        deploying tape's): no guide and no pull there."""
         config, frame, tp = self.config, self.frame, self.config.tape
-        start, end = self._ends(start)
-        name = f"hybrid_coil{len(self.moves)}"
+        start, end = self._ends(start) if end is None else (start, end)
         shell = WindowOnHub(
             config,
             start,
@@ -174,7 +182,8 @@ class HybridCoiling:
             self.element,
             frame,
             self.contact,
-            shift=self.predictor == "shift",
+            shift=self.predictor == "shift" and not released,
+            released=released,
             comm=self.comm,
             name=f"{name}_shell",
         )
@@ -203,6 +212,8 @@ class HybridCoiling:
             )
             ties.append(("xi1_min", (start, 0.0, self.centroid), "flat"))
         if end < tp.L:
+            ties.append(("xi1_max", (end, 0.0, self.centroid), "arc"))
+        if end < tp.L and not released:
             tip = (tp.L, 0.0, self.centroid)
             # held in the plane of coiling, free to turn in it: the full shell's guide holds the
             # end's directors, but its reduced-integrated shear lets the end section pitch within
@@ -210,7 +221,6 @@ class HybridCoiling:
             # tape left the coil early (docs/hybrid.md, the free end)
             beam.hold(tip, (1, 2), rotation=(0, 2))
             beam.end_load(tip, force=(config.coiling.tension, 0.0, 0.0), constant=True)
-            ties.append(("xi1_max", (end, 0.0, self.centroid), "arc"))
             if self.predictor == "shift":
                 # the straight part beyond the window runs towards the hub as the tape winds on
                 beam.slide(end - 1e-9 * tp.L, lambda a, b: wound_length(shell.contact, a, b))
@@ -371,17 +381,19 @@ class HybridCoiling:
             )
             self.angle = target
 
-    def carry_into(self, model) -> None:
+    def carry_into(self, model, hybrid: HybridProblem | None = None) -> None:
         """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingModel` of
-        the same configuration) to this hybrid's state: the hub angle and the pull, the shell's
+        the same configuration) to this hybrid's state (or ``hybrid``'s: one of this tape at this
+        hub angle, a deploying one): the hub angle and the pull, the shell's
         state where the window is and the beams' sections placed elsewhere
         (:func:`~tapecoil.models.window.carry_over`), and the winding angles (collective). The
         full shell is then in the hybrid's configuration, not in its own equilibrium."""
-        x, points = centre_line(self.hybrid)
+        hybrid = hybrid or self.hybrid
+        x, points = centre_line(hybrid)
         psi = winding_along(self.frame, self.angle, points)
         model.set_hub_angle(self.angle)
         model.tension.value = self.config.coiling.tension
-        carry_over(self.hybrid, full_shell(model.model))
+        carry_over(hybrid, full_shell(model.model))
         contact = model.contact
         contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
         contact.update(self.angle)

@@ -247,12 +247,13 @@ def run_hybrid_coiling(
     resume: str | Path | None = None,
     progress: bool = True,
     stop=None,
-) -> tuple[dict, CoilingModel]:
+) -> tuple[dict, CoilingModel, HybridCoiling | None]:
     """Coil with the hybrid into ``directory`` (the files of
-    :func:`~tapecoil.phases.coiling_run.run_coiling`); returns the phase summary and the full
-    shell's settled :class:`CoilingModel`. ``resume``: a checkpoint of a completed hybrid
-    coiling (its summary again, nothing computed); one of a stopped hybrid coiling cannot be
-    continued, and the coiling starts again."""
+    :func:`~tapecoil.phases.coiling_run.run_coiling`); returns the phase summary, the full
+    shell's settled :class:`CoilingModel` and the coiled :class:`HybridCoiling` (the hybrid's own
+    state, which its deployment starts from; None when nothing was computed). ``resume``: a
+    checkpoint of a completed hybrid coiling (its summary again, nothing computed); one of a
+    stopped hybrid coiling cannot be continued, and the coiling starts again."""
     from tapecoil.core.checkpoint import read_meta
     from tapecoil.phases.coiling import read_checkpoint
 
@@ -264,7 +265,7 @@ def run_hybrid_coiling(
             model, _ = read_checkpoint(resume, config, comm)
             LOG.info("hybrid coiling: completed in %s at %.6g rad", resume, model.root.angle)
             phase = HybridCoilingPhase(config, comm, model=model, restart=restart)
-            return phase.summary(None, t_start), model
+            return phase.summary(None, t_start), model, None
         LOG.warning(
             "hybrid coiling: %s cannot be continued (a stopped hybrid coiling); coiling again", resume
         )
@@ -281,4 +282,14 @@ def run_hybrid_coiling(
         comm.size,
     )
     summary = run_phase(phase, directory, config, comm, phase.model.model, None, progress, t_start)
-    return summary, phase.model
+    return summary, phase.model, phase.coiling
+
+
+def coil_again(config: Config, comm=MPI.COMM_WORLD) -> HybridCoiling:
+    """The hybrid's coiling of ``config`` computed again, without files: the hybrid's own
+    coiled state, which a checkpoint of the full shell does not hold (for a deployment by the
+    hybrid after a resumed coiling)."""
+    coiling = HybridCoiling(config, comm, window=WindowSettings.from_config(config.model))
+    coiling.flatten()
+    coiling.coil(config.coiling.hub_angle)
+    return coiling

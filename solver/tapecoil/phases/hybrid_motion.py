@@ -24,8 +24,11 @@ class HybridMotion:
     """``hybrid``'s shell and beam in time (see the module), from the state they are in, at
     rest. ``tape``: the shell's wall (its density and thickness give the inertia per unit area);
     ``line_density`` [kg/m] and ``rotary_inertia`` (J1, J2, J3) [kg m] the beam's. The loads
-    are those of the hybrid's load parameter as it stands (:meth:`set_load` changes it).
-    :meth:`step` takes one step."""
+    are those of the hybrid's load parameter as it stands (:meth:`set_load` changes it), and
+    those ``loads(scheme)`` gives for the shell's scheme: a residual form of the shell's state
+    taken as it is (a hold's, at the scheme's level) and point forces on the shell's dofs.
+    :meth:`step` takes one step; the parts are at rest unless :meth:`set_rates` starts them
+    moving."""
 
     def __init__(
         self,
@@ -36,6 +39,7 @@ class HybridMotion:
         rho_inf: float = 0.9,
         settings: SolverConfig | None = None,
         options: dict | None = None,
+        loads=None,
     ):
         self.hybrid = hybrid
         shell = hybrid.shell
@@ -44,11 +48,35 @@ class HybridMotion:
             shell.model, self.shell_scheme, None, tape, energy=shell.model.strain_energy
         )
         F_static, _ = shell.forms()
-        F_s, J_s = inertia.alpha_forms(self.shell_scheme.force_average(F_static))
+        forces = self.shell_scheme.force_average(F_static)
+        point_forces = []
+        if loads is not None:
+            form, point_forces = loads(self.shell_scheme)
+            forces = forces + form
+        F_s, J_s = inertia.alpha_forms(forces)
         self.beam = BeamDynamics(hybrid.beam, line_density, rotary_inertia, rho_inf=rho_inf)
         self.settings = settings or SolverConfig()
+        shell.point_forces.extend(point_forces)
         self.solver = hybrid._solver(F_s, J_s, self.settings, options, beam_forms=self.beam.forms)
         self.time = 0.0
+
+    @property
+    def schemes(self) -> tuple:
+        """The shell's and the beam's :class:`~tapecoil.core.timeint.GeneralizedAlpha`."""
+        return self.shell_scheme, self.beam.scheme
+
+    def rates(self) -> tuple:
+        """Copies of (shell v, shell a, beam v, beam a) of the last converged time (dof arrays;
+        the beam's are its nodes' (u', w) and (u'', w'))."""
+        return tuple(f.x.array.copy() for s in self.schemes for f in (s.v_old, s.a_old))
+
+    def set_rates(self, rates) -> None:
+        """Start from the rates ``rates`` (as :meth:`rates` gives them) at the present state."""
+        for scheme, (v, a) in zip(self.schemes, (rates[:2], rates[2:]), strict=True):
+            scheme.v_old.x.array[:] = v
+            scheme.a_old.x.array[:] = a
+            scheme.restart()
+        self.beam.committed()
 
     def set_load(self, value: float) -> None:
         """The hybrid's load parameter (its loads per unit load) from now on."""
@@ -68,12 +96,18 @@ class HybridMotion:
                 scheme.q.x.array[:] = state
                 scheme.q.x.scatter_forward()
             return result
-        for scheme in schemes:
+        self.commit_step()
+        self.time += dt
+        return result
+
+    def commit_step(self) -> None:
+        """After a converged step: each scheme moves on, then the hybrid commits (the ties'
+        frames, the beam's rotations, the winding angles) and the beam's scheme starts its next
+        step from a zero rotation."""
+        for scheme in self.schemes:
             scheme.advance()
         self.hybrid._commit()
         self.beam.committed()
-        self.time += dt
-        return result
 
     def destroy(self) -> None:
         self.solver.destroy()

@@ -1,7 +1,7 @@
 """The hybrid's shell window on the hub in coiling (:class:`WindowOnHub`): a stretch of the
 Naghdi shell anywhere along the tape, touching the hub and the turns beneath on the spiral, its
 root attached to the hub when it starts at the root, the free end's guide and pull when it ends
-there, and the coiling's predictors for the material in it."""
+there (unless released: a deploying tape's), and the coiling's predictors for the material in it."""
 
 from __future__ import annotations
 
@@ -48,7 +48,9 @@ class WindowOnHub(ShellProblem):
     """The hybrid's shell window from ``start`` [m] along the tape, ``length`` [m] long, on the
     hub of ``frame``: the contact of its face with the hub and the turns beneath
     (:class:`CoilContact`, the spiral), the root attached to the hub when the window starts at
-    the root, the free end's guide and pull ``tension`` [N] when it ends at the free end.
+    the root, the free end's guide and pull ``tension`` [N] when it ends at the free end, unless
+    ``released`` (the end then free, as a deploying tape's: :class:`~tapecoil.phases.release.EndHold`
+    lets it go, the window standing in for the tape there).
 
     The load parameter is the hub angle [rad], or the root's flattening while ``flattening``.
     """
@@ -63,10 +65,12 @@ class WindowOnHub(ShellProblem):
         contact: ContactSettings,
         *,
         shift: bool = False,
+        released: bool = False,
         comm=MPI.COMM_WORLD,
         name: str = "window",
     ):
         tp = config.tape
+        self.config, self.comm, self.element_length = config, comm, element
         across = MeshResolution.from_config(config.mesh, tp.L).across
         super().__init__(
             StripGeometry(tp.R, tp.b, length, start=start),
@@ -89,7 +93,9 @@ class WindowOnHub(ShellProblem):
             self.bcs += self.root.bcs
             self.contact.reset()
         energy = model.strain_energy + self.contact.energy
-        if start + length >= tp.L * (1 - 1e-9):
+        # the strain and contact energy (an end hold's internal forces are its derivative)
+        self.energy = energy
+        if start + length >= tp.L * (1 - 1e-9) and not released:
             free_end = self.strip.facet_tags.find(FREE_END)
             self.bcs += [facet_condition(model, sub, free_end)[1] for sub in _GUIDE_COMPONENTS]
             # T spread evenly over the free end's arc, as the full shell's pull
@@ -113,6 +119,11 @@ class WindowOnHub(ShellProblem):
     def commit(self, load: float) -> None:
         if not self.flattening:
             self.contact.update(load)
+
+    def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
+        """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
+        facets = self.strip.facet_tags.find(tag)
+        return owned_subspace_dofs(self.model.W, sub, self.model.mesh.topology.dim - 1, facets)
 
     def section_forces(self) -> dict:
         """The window's section forces along the tape

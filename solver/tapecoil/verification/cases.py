@@ -24,6 +24,7 @@ from tapecoil.verification.beam import (
 from tapecoil.verification.checks import CaseResult
 from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_fold, hybrid_window
 from tapecoil.verification.hybrid_coil import hybrid_coil
+from tapecoil.verification.hybrid_deploy import hybrid_deploy
 from tapecoil.verification.hybrid_motion import hybrid_vibration
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
@@ -84,6 +85,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = hybrid_window(config, comm=comm)  # on meshes of its own, whatever the preset
     elif name == "hybrid-coil":
         result = hybrid_coil(config, preset, comm=comm)
+    elif name == "hybrid-deploy":
+        result = hybrid_deploy(config, preset, comm=comm)
     elif name == "hybrid-vibration":
         resolution = MeshResolution.from_config(MeshConfig(preset=preset), CANTILEVER_LENGTH)
         result = hybrid_vibration(config, resolution, comm=comm)

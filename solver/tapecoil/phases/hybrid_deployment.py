@@ -1,0 +1,457 @@
+"""The deployment of a tape coiled by the shell-beam hybrid, with the hybrid itself: the shell
+window follows the ploy region down the coil as the tape unwinds.
+
+The start is a :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling` at its final hub angle,
+in equilibrium with the guide and the pull at the free end. At release the window is rebuilt
+from where it starts to the free end (it is there already when the coil leaves less than
+``window_ahead`` free) with the free end let go, the state carried over
+(:func:`~tapecoil.models.window.carry_over`), and the end is held by the full shell's release
+hold (:class:`~tapecoil.phases.release.EndHold`: a spring to the stowed end and the dead
+forces that held it there, let go over ``deployment.release_time``). The hub is held at its
+stowed angle; the root stays clamped to it; the flattened beam on the coil and the window's
+shell rest on the spiral of turns, their winding angles read from the state after every step,
+as in coiling.
+
+The shell and the beam are stepped together by generalized-alpha
+(:class:`~tapecoil.phases.hybrid_motion.HybridMotion`) with the deployment's settings: its
+spectral radius, its first and largest steps, the release's steps of at most a twentieth of it,
+growth after easy solves and cut-back after failed ones, and, with ``deployment.error_tolerance``,
+steps sized by their local error (the shell's and the beam's displacements together, as the
+full shell's :meth:`~tapecoil.phases.deployment.DeploymentModel.step_error`).
+
+As the tape unwinds the lift-off point travels towards the root. Once the release is over and
+the lift-off has come ``window_move`` closer to the window's start less ``window_behind``, the
+window moves back along the tape: a new hybrid is built whose window, of its own length,
+starts ``window_behind`` behind the lift-off, and the state and the rates (velocities and
+accelerations) are carried over by :func:`~tapecoil.models.window.carry_motion`; shell becomes
+beam ahead of the ploy region, towards the free end, and beam becomes shell on the coil. The
+sections placed into shell from the flattened beam are then settled (:func:`settle_placed`).
+
+The deployed fraction is the full shell's measure (:func:`~tapecoil.measures.deployment.coiled_length`)
+read on the hybrid's centre line: the beam's line and the window's middle line, their inner face
+half a thickness inside them.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from tapecoil.core.coupled_newton import JointState
+from tapecoil.core.dofs import global_scalar, global_size, owned_size
+from tapecoil.core.newton import SNESSolver
+from tapecoil.core.stepping import Continuation
+from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
+from tapecoil.models.beam_section import BeamSection
+from tapecoil.models.nodes import Nodes
+from tapecoil.models.window import carry_motion, carry_over
+from tapecoil.phases.deployment_forms import director_rates
+from tapecoil.phases.hybrid_line import centre_line, winding_along
+from tapecoil.phases.hybrid_motion import HybridMotion
+from tapecoil.phases.release import EndHold, split_state
+
+__all__ = ["DeploymentRecord", "HybridDeployment"]
+
+# the rates are carried over a window move along the motion's path over this share of the time
+# an element's length takes at the tape's fastest speed (central differences: their second order
+# error is about 1e-6 of the rates, the rounding of the acceleration's difference far below it)
+PROBE_SHARE = 1e-3
+
+
+@dataclass
+class DeploymentRecord:
+    """A converged step of the hybrid's deployment: time [s], the step to it [s], the deployed
+    fraction lambda and the coiled length [m], the window (start, end) [m] along the tape, the
+    strain, contact and kinetic energy [J] (the ties' penalty apart), the work of the release's
+    hold on the tape since release [J], the step's Newton iterations, cut-backs and rejected
+    steps, and the wall time since release [s]."""
+
+    time: float
+    step: float
+    deployed: float
+    coiled_length: float
+    window: tuple[float, float]
+    strain_energy: float
+    contact_energy: float
+    kinetic_energy: float
+    hold_work: float
+    iterations: int
+    cutbacks: int
+    rejected_steps: int
+    wall_time: float
+
+
+def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
+    """Settle the sections of ``hybrid``'s shell that a window move placed from the old beam
+    (those outside ``old_window`` (start, end) [m], but for the tie's edge): one static solve of
+    the shell's energy for their dofs, every other dof held where the carry-over put it.
+
+    A beam's section placed rigidly at the shell's nodes is not the shell's own equilibrium
+    there: the shell's quadratic interpolation between sections placed exactly at its nodes
+    strains it (on a coil, where an element spans a third of a radian of the hub on the default
+    mesh and a radian on the coarse one). In a static solve the next step removes it; in time it
+    would be released as a spurious vibration. Returns the strain energy [J] of the window before
+    and after, the largest displacement [m] and the Newton iterations (collective); on a failed
+    solve the placed state is kept and ``converged`` is False."""
+    shell = hybrid.shell
+    model = shell.model
+    nodes = Nodes(model)
+    (start, end), _ = shell.surface.xi_range
+    x = nodes.xi[0]
+    tol = 1e-9 * (1.0 + abs(end))
+    free = ((x < old_window[0] - tol) | (x > old_window[1] + tol)) & (x > start + tol) & (x < end - tol)
+    strain = dolfinx.fem.form(model.strain_energy)
+    before = global_scalar(strain, shell.comm)
+    if shell.comm.allreduce(int(free.sum())) == 0:
+        return {
+            "strain_energy_placed": before,
+            "strain_energy_settled": before,
+            "moved": 0.0,
+            "iterations": 0,
+            "converged": True,
+        }
+    free_dofs = np.concatenate([nodes.u_dofs[free].ravel(), nodes.theta_dofs[free].ravel()])
+    size = len(model.q.x.array)
+    held = np.setdiff1d(np.arange(size, dtype=np.int32), free_dofs).astype(np.int32)
+    placed = dolfinx.fem.Function(model.W)
+    placed.x.array[:] = model.q.x.array
+    hold = dolfinx.fem.dirichletbc(placed, held)
+    F, J = shell.forms()
+    solver = SNESSolver.from_config(
+        F,
+        J,
+        model.q,
+        [*shell.bcs, hold],
+        config.solver,
+        prefix=f"{shell.name}_placed_",
+        defaults={"pc_type": "cholesky"},
+        state_scale=model.rounding_scale(),
+    )
+    result = solver.solve()
+    if not result.converged:
+        model.q.x.array[:] = placed.x.array
+    model.q.x.scatter_forward()
+    solver.destroy()
+    change = model.q.x.array - placed.x.array
+    moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
+    return {
+        "strain_energy_placed": before,
+        "strain_energy_settled": global_scalar(strain, shell.comm),
+        "moved": shell.comm.allreduce(moved, op=MPI.MAX),
+        "iterations": int(result.iterations),
+        "converged": bool(result.converged),
+    }
+
+
+class _Restart(Exception):
+    """Raised from the step callback to rebuild the time stepping (a window move, a stop)."""
+
+
+class HybridDeployment:
+    """The deployment of ``coiling``'s tape (a :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`
+    at its final hub angle) with the hybrid (see the module). :meth:`run` steps to
+    ``deployment.lambda_end`` or ``deployment.t_end``; ``records`` holds a row per converged
+    step and ``moves`` the window's places, (time, start, end). The joint solvers read PETSc
+    options under ``hybrid_deploy<k>_``, k the window's number from 0; ``solver.petsc_options``
+    and ``deployment.petsc_options`` reach all of them."""
+
+    def __init__(self, coiling, rho_inf: float | None = None):
+        self.coiling = coiling
+        self.config = cfg = coiling.config
+        self.comm = coiling.comm
+        d = cfg.deployment
+        if d.hub != "fixed":
+            raise ValueError("the hybrid deploys with the hub held: deployment.hub must be 'fixed'")
+        if np.any(np.asarray(d.gravity, dtype=float)):
+            raise ValueError("the hybrid deploys without gravity: deployment.gravity must be zero")
+        if d.rho_inf >= 1.0 and rho_inf is None:
+            raise ValueError(
+                "the hybrid deploys with generalized-alpha: deployment.rho_inf must be below 1 "
+                "(the energy-conserving scheme is the full shell's)"
+            )
+        self.rho_inf = d.rho_inf if rho_inf is None else rho_inf
+        self.angle = coiling.angle
+        tp = cfg.tape
+        arc = BeamSection.circular_arc(tp.R, tp.alpha, tp.h, tp.E, tp.nu)
+        self.line_density = tp.rho_l
+        # the section's mass moments of inertia per unit length: density times its second
+        # moments, the arc's (the flattened strip's differ, but its turns barely spin)
+        self.rotary_inertia = tp.density * np.array([arc.EI2 + arc.EI3, arc.EI2, arc.EI3]) / tp.E
+        self.options = {"pc_type": "cholesky", **cfg.solver.petsc_options, **d.petsc_options}
+        self.time = 0.0
+        self.hold_work = 0.0
+        self.records: list[DeploymentRecord] = []
+        # each move's settling of the sections placed from the beam (settle_placed's figures)
+        self.placed_settling: list[dict] = []
+        self.moves: list[tuple[float, float, float]] = []
+        old = coiling.hybrid
+        start = old.shell.surface.xi_range[0][0]
+        # the window reaches the free end, whose hold the release lets go
+        self.hybrid = coiling.build(start, self._name(), released=True, end=tp.L)
+        carry_over(old, self.hybrid)
+        self._set_winding(old, self.hybrid)
+        self.hold = None
+        self.motion = self._motion(self.hybrid, release=True)
+        self.moves.append((0.0, *self.window()))
+
+    # -- the hybrid and its motion -------------------------------------------------------------
+    def _name(self) -> str:
+        return f"hybrid_deploy{len(self.moves)}"
+
+    def window(self) -> tuple[float, float]:
+        (start, end), _ = self.hybrid.shell.surface.xi_range
+        return float(start), float(end)
+
+    def _set_winding(self, old, new) -> None:
+        x, points = centre_line(old)
+        psi = winding_along(self.coiling.frame, self.angle, points)
+        new.beam.set_winding(lambda s: np.interp(s, x, psi))
+        contact = new.shell.contact
+        contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
+        contact.update(self.angle)
+
+    def _motion(self, hybrid, release: bool) -> HybridMotion:
+        cfg = self.config
+
+        def hold_loads(scheme):
+            self.hold = EndHold(hybrid.shell, scheme, cfg.deployment.release_time)
+            return self.hold.form, [self.hold.point_force()]
+
+        motion = HybridMotion(
+            hybrid,
+            cfg.tape,
+            self.line_density,
+            self.rotary_inertia,
+            rho_inf=self.rho_inf,
+            settings=cfg.solver,
+            options=self.options,
+            loads=hold_loads if release else None,
+        )
+        motion.set_load(self.angle)
+        shell = hybrid.shell.model
+        v_u, v_theta = split_state(motion.shell_scheme.v_old)
+        _, d_dot, _ = director_rates(shell, shell.theta, v_theta)
+        rho, h = cfg.tape.density, cfg.tape.h
+        kinetic = 0.5 * rho * h * (ufl.dot(v_u, v_u) + h**2 / 12 * ufl.dot(d_dot, d_dot))
+        self._shell_kinetic = dolfinx.fem.form(kinetic * shell.jacobian * shell.dx)
+        self._strain = dolfinx.fem.form(shell.strain_energy)
+        self._contact = dolfinx.fem.form(hybrid.shell.contact.energy)
+        beam = hybrid.beam
+        self._beam_contact = dolfinx.fem.form(sum(beam.energy_terms)) if beam.energy_terms else None
+        return motion
+
+    # -- measures -------------------------------------------------------------------------------
+    def dofs(self) -> int:
+        """The hybrid's unknowns: its shell's and its beam's (collective)."""
+        h = self.hybrid
+        return global_size(h.shell.model.W) + global_size(h.beam.model.W)
+
+    def strain_energy(self) -> float:
+        """The strain energy of shell and beam [J] (collective)."""
+        return global_scalar(self._strain, self.comm) + self.hybrid.beam.model.strain_energy()
+
+    def contact_energy(self) -> float:
+        """The penalty energy of the shell's and the beam's contact with the hub and the turns
+        [J] (collective)."""
+        beam = 0.0 if self._beam_contact is None else global_scalar(self._beam_contact, self.comm)
+        return global_scalar(self._contact, self.comm) + beam
+
+    def energies(self) -> dict[str, float]:
+        """The strain, contact and kinetic energy [J] (collective)."""
+        return {
+            "strain": self.strain_energy(),
+            "contact": self.contact_energy(),
+            "kinetic": self.kinetic_energy(),
+        }
+
+    def kinetic_energy(self) -> float:
+        """The kinetic energy of shell and beam [J], from the last converged rates (collective)."""
+        return global_scalar(self._shell_kinetic, self.comm) + self.motion.beam.kinetic_energy()
+
+    def lift_off(self) -> dict[str, float]:
+        """The coiled length [m] and the deployed fraction lambda, by the full shell's measure
+        (:func:`~tapecoil.measures.deployment.coiled_length`) on the hybrid's centre line, the
+        inner face half a thickness inside it (collective)."""
+        tp = self.config.tape
+        x, points = centre_line(self.hybrid)
+        psi = winding_along(self.coiling.frame, self.angle, points)
+        obstacle = self.hybrid.shell.contact.spiral_radius(psi)
+        gap = self.coiling.frame.polar(points.T)[0] - 0.5 * tp.h - obstacle
+        coiled = coiled_length(x, gap, obstacle, LIFT_OFF_GAP * tp.h)
+        return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+
+    # -- stepping -------------------------------------------------------------------------------
+    def step_error(self) -> float:
+        """The step's local error in the displacement over its tolerance, the shell's and the
+        beam's translations together (as the full shell's; collective; before the advance)."""
+        tol = self.config.deployment.error_tolerance
+        sums = np.zeros(3)
+        for scheme, dofs in self._translations():
+            error = scheme.local_error()[dofs]
+            increment = scheme.q.x.array[dofs] - scheme.q_old.x.array[dofs]
+            sums += [error @ error, increment @ increment, dofs.size]
+        sums = self.comm.allreduce(sums)
+        count = max(sums[2], 1.0)
+        rms_error, rms_increment = np.sqrt(sums[0] / count), np.sqrt(sums[1] / count)
+        return float(rms_error / (tol * (rms_increment + self.config.tape.h)))
+
+    def _translations(self):
+        """(scheme, owned translational dofs) of the shell and the beam."""
+        shell, beam = self.hybrid.shell, self.hybrid.beam.model
+        shell_u = shell.contact.nodes.u_dofs.ravel()
+        beam_u = beam.node_u_dofs.ravel()
+        return (
+            (self.motion.shell_scheme, np.unique(shell_u[shell_u < owned_size(shell.model.W)])),
+            (self.motion.beam.scheme, np.unique(beam_u[beam_u < owned_size(beam.W)])),
+        )
+
+    def _wanted_start(self, lift: float) -> float | None:
+        """The window's new start [m] for the lift-off at ``lift`` [m], None to stay."""
+        c = self.coiling
+        start, _ = self.window()
+        if start <= 0.0 or self.time < self.config.deployment.release_time:
+            return None
+        wanted = c.element * math.floor((lift - c.window.behind) / c.element + 1e-9)
+        if wanted > start - c.move + 1e-9 * self.config.tape.L:
+            return None
+        return max(wanted, 0.0)
+
+    def _move(self, start: float) -> None:
+        old, motion = self.hybrid, self.motion
+        rates = motion.rates()
+        before = self.energies()
+        # the fastest node's speed (the translations'; the directors' angles may spin fast)
+        speeds = [rates[0][dofs] for dofs in (Nodes(old.shell.model).u_dofs,)] + [
+            rates[2][old.beam.model.node_u_dofs]
+        ]
+        fastest = self.comm.allreduce(max(float(np.abs(v).max(initial=0.0)) for v in speeds), op=MPI.MAX)
+        probe = PROBE_SHARE * self.coiling.element / max(fastest, 1e-3)
+        new = self.coiling.build(start, self._name(), released=True)
+        new_rates = carry_motion(old, new, rates, probe)
+        self._set_winding(old, new)
+        settling = settle_placed(new, old.shell.surface.xi_range[0], self.config)
+        motion.destroy()
+        self.hold = None  # moved after the release: the end is free
+        self.hybrid = new
+        self.motion = self._motion(new, release=False)
+        self.motion.set_rates(new_rates)
+        after = self.energies()
+        self.placed_settling.append(
+            {
+                **settling,
+                **{f"{k}_before": v for k, v in before.items()},
+                **{f"{k}_after": v for k, v in after.items()},
+            }
+        )
+        self.moves.append((self.time, *self.window()))
+
+    def _commit(self, motion) -> None:
+        if self.hold is not None:  # its work over the step, before the state moves on
+            self.hold_work += self.hold.work()
+        motion.commit_step()
+
+    def record(self, step=None, t0: float | None = None) -> DeploymentRecord:
+        """The state's record (collective): of the converged ``step`` (a
+        :class:`~tapecoil.core.stepping.StepRecord`), or of the release (no step); the wall time
+        from ``t0`` (:func:`time.perf_counter`)."""
+        reading = self.lift_off()
+        return DeploymentRecord(
+            self.time,
+            0.0 if step is None else float(step.step),
+            reading["lambda"],
+            reading["coiled_length"],
+            self.window(),
+            self.strain_energy(),
+            self.contact_energy(),
+            self.kinetic_energy(),
+            self.hold_work,
+            0 if step is None else int(step.iterations),
+            0 if step is None else int(step.cutbacks),
+            0 if step is None else int(step.rejected),
+            0.0 if t0 is None else time.perf_counter() - t0,
+        )
+
+    def run(self, on_step=None) -> str:
+        """Release and step to ``deployment.lambda_end`` (returns "deployed") or ``t_end``
+        ("t_end"); ``on_step(record)`` after each converged step. Raises
+        :class:`~tapecoil.core.stepping.ContinuationError` when a step does not converge even cut
+        back, the last converged state kept."""
+        cfg = self.config
+        d = cfg.deployment
+        t0 = time.perf_counter()
+        smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
+        release = min(d.release_time, d.t_end)
+        phases = [(release, min(release / 20, d.dt))] if release > 0 else []
+        phases.append((d.t_end, max(d.max_dt, d.dt)))
+        if release <= 0:
+            self.hold.release(0.0)
+        next_step = None
+        outcome = "t_end"
+
+        def converged(step, end):
+            nonlocal next_step, outcome
+            self.time = step.load
+            next_step = step.next_step if step.load < end else None
+            record = self.record(step, t0)
+            self.records.append(record)
+            if on_step is not None:
+                on_step(record)
+            if record.deployed >= d.lambda_end:
+                outcome = "deployed"
+                raise _Restart
+            start = self._wanted_start(record.coiled_length)
+            if start is not None:
+                self._move(start)
+                raise _Restart
+
+        for end, max_dt in phases:
+            while self.time < end * (1 - 1e-12) and outcome != "deployed":
+                motion = self.motion
+                alpha_f = motion.shell_scheme.parameters.alpha_f
+
+                def set_time(target, motion=motion, alpha_f=alpha_f):
+                    dt = target - self.time
+                    for scheme in motion.schemes:
+                        scheme.set_step(dt)
+                    if self.hold is not None:
+                        self.hold.release(target - alpha_f * dt)
+
+                def predict(t_from, t_to, motion=motion):
+                    for scheme in motion.schemes:
+                        scheme.predict(t_to - t_from)
+
+                span = end - self.time
+                control = cfg.solver.control(
+                    initial_step=min(d.dt / span, 1.0),
+                    max_step=min(max_dt / span, 1.0),
+                    min_step=smallest / span,
+                    range_fraction=d.t_end / span,
+                )
+                continuation = Continuation(
+                    motion.solver.solve,
+                    set_time,
+                    JointState(self.hybrid.shell.model.q, self.hybrid.beam.model.q),
+                    control,
+                    predict=predict,
+                    error=self.step_error if d.error_tolerance > 0 else None,
+                    commit=lambda motion=motion: self._commit(motion),
+                    easy_iterations=8,
+                )
+                continuation.on_step = lambda step, end=end: converged(step, end)
+                first, next_step = next_step, None
+                try:
+                    continuation.run(self.time, end, first_step=first)
+                except _Restart:
+                    continue
+            if outcome == "deployed":
+                break
+        return outcome
+
+    def destroy(self) -> None:
+        self.motion.destroy()

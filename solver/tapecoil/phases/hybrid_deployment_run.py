@@ -1,0 +1,214 @@
+"""The hybrid's deployment as a phase of the one runner: the tape coiled by the hybrid deploys
+with the hybrid (:class:`~tapecoil.phases.hybrid_deployment.HybridDeployment`), and the run's
+files are the full shell's.
+
+The hybrid's state is carried into the full shell (:func:`~tapecoil.models.window.carry_over`)
+whenever the runner writes it (the ParaView series and the surface snapshots, every
+``output.vtx_every`` steps, and at the end), so that the pictures, the snapshots, the
+closest-turns measure and the checkpoint deployed/ are the whole tape's. The history has the
+full shell's deployment columns that the hybrid measures (the deployed fraction by the same
+definition, the strain, contact and kinetic energies and the energy balance's remainder), with
+the window's ends and the hybrid's DOFs; the root's loads are not measured.
+
+A completed hybrid deployment is not recomputed on ``--resume`` (its checkpoint keeps the
+history); a stopped one deploys again from the release: the hybrid's state in time is not
+checkpointed mid-run.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+from tapecoil.config import Config
+from tapecoil.measures.deployment import deployment_measures
+from tapecoil.phases.hybrid_deployment import DeploymentRecord, HybridDeployment
+from tapecoil.phases.runner import LOG, Phase, run_phase
+
+__all__ = ["HybridDeploymentPhase", "run_hybrid_deployment"]
+
+
+class HybridDeploymentPhase(Phase):
+    """The deployment of ``coiling``'s tape (a coiled
+    :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`) by the hybrid, written through
+    ``model``'s full shell (a :class:`~tapecoil.phases.coiling.CoilingModel` of the same
+    configuration: the settled stowed state); or, with ``restart``, the summary of a completed
+    one. ``stop``: as the full shell's deployment."""
+
+    name, checkpoint_name, unit = "deployment", "deployed", "s"
+
+    def __init__(self, config: Config, model, coiling=None, restart: dict | None = None, stop=None):
+        super().__init__()
+        self.config, self.model, self.coiling, self.stop = config, model, coiling, stop
+        self.comm = model.comm
+        self.target = config.deployment.t_end
+        self.deployment = None
+        self.moves: list = []
+        self.placed_settling: list = []
+        self.dofs = 0
+        self._t0 = time.perf_counter()
+        self._stowed_energy = 0.0
+        if restart is not None:
+            self.history = list(restart["history"])
+            self.completed = True
+            self.moves = restart.get("moves", [])
+            self.dofs = restart.get("dofs", 0)
+
+    # -- the runner's hooks ---------------------------------------------------------------------
+    def position(self) -> float:
+        return self.history[-1]["time"] if self.history else 0.0
+
+    def restart_state(self) -> dict:
+        return {"model": "hybrid", "history": self.history, "moves": self.moves, "dofs": self.dofs}
+
+    def checkpoint_meta(self) -> dict:
+        return {"hub_angle": self.model.root.angle, "tension": 0.0}
+
+    def write_checkpoint(self, path: Path, meta: dict) -> None:
+        self.model.tape.write_checkpoint(path, meta)
+
+    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
+        window = f" window {row['window_start']:.3f}-{row['window_end']:.3f} m"
+        return (
+            row["time"],
+            row["step"],
+            row["newton_iterations"],
+            f" lambda {row['lambda']:.3f}{window}",
+            False,
+        )
+
+    def _row(self, record: DeploymentRecord) -> dict:
+        total = record.strain_energy + record.contact_energy + record.kinetic_energy
+        if not self.history:
+            self._stowed_energy = total
+        return {
+            "time": record.time,
+            "step": record.step,
+            "newton_iterations": record.iterations,
+            "cutbacks": record.cutbacks,
+            "rejected_steps": record.rejected_steps,
+            "lambda": record.deployed,
+            "coiled_length": record.coiled_length,
+            "hub_angle": self.coiling.angle,
+            "strain_energy": record.strain_energy,
+            "contact_energy": record.contact_energy,
+            "kinetic_energy": record.kinetic_energy,
+            "external_work": record.hold_work,
+            # what the scheme and the window moves took out of the tape's energy (or put in)
+            "dissipated_energy": self._stowed_energy + record.hold_work - total,
+            "window_start": record.window[0],
+            "window_end": record.window[1],
+            "dofs": self.deployment.dofs(),
+            "wall_time": time.perf_counter() - self._t0,
+        }
+
+    def _add(self, record: DeploymentRecord) -> None:
+        row = self._row(record)
+        self.history.append(row)
+        self.dofs = max(self.dofs, row["dofs"])
+        count = len(self.history)
+        if count % self.config.output.vtx_every == 0:
+            self._carry()  # the runner writes the full shell after this row
+        if self.on_row is not None:
+            self.on_row(row)
+        if self.stop is not None:
+            self.stop.check(self.comm)
+
+    def _carry(self) -> None:
+        self.coiling.carry_into(self.model, self.deployment.hybrid)
+
+    def advance(self) -> None:
+        d = self.config.deployment
+        self._t0 = time.perf_counter()
+        self.deployment = deployment = HybridDeployment(self.coiling)
+        LOG.info(
+            "deployment with the hybrid: generalized-alpha, rho_inf = %g, to lambda = %g, window %g-%g m",
+            deployment.rho_inf,
+            d.lambda_end,
+            *deployment.window(),
+        )
+        self._add(deployment.record())
+        try:
+            outcome = deployment.run(self._add)
+            self.completed = outcome == "deployed"
+            if not self.completed:
+                self.message = f"t_end = {d.t_end:g} s reached before lambda = {d.lambda_end:g}"
+        finally:
+            self.moves = [list(m) for m in deployment.moves]
+            self.placed_settling = deployment.placed_settling
+            self._carry()  # the last converged state, for the final files
+            deployment.destroy()
+
+    def summary(self, interrupted, t_start: float) -> dict:
+        """The deployment's summary: the full shell's measures against the theory, from the
+        hybrid's history, and the run's figures."""
+        history = self.history
+        res = self.model.tape.strip.resolution
+        steps = history[1:]
+        placed = self.placed_settling
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "time": history[-1]["time"],
+            "lambda": history[-1]["lambda"],
+            "rho_inf": self.config.deployment.rho_inf,
+            "scheme": "alpha",
+            "measures": deployment_measures(self.config, history),
+            "run": {
+                "model": "hybrid",
+                "ranks": self.comm.size,
+                "dofs": self.dofs,
+                "mesh": f"{res.along} x {res.across}",
+                "steps": len(steps),
+                "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
+                "cutbacks": int(sum(r["cutbacks"] for r in steps)),
+                "rejected_steps": int(sum(r["rejected_steps"] for r in steps)),
+                "smallest_step": min((r["step"] for r in steps), default=0.0),
+                "largest_step": max((r["step"] for r in steps), default=0.0),
+                "window_moves": max(len(self.moves) - 1, 0),
+                "placed_sections_settled": {
+                    "newton_iterations": int(sum(p["iterations"] for p in placed)),
+                    "largest_displacement": max((p["moved"] for p in placed), default=0.0),
+                    "strain_energy_released": float(
+                        sum(p["strain_energy_placed"] - p["strain_energy_settled"] for p in placed)
+                    ),
+                },
+                "wall_time": history[-1]["wall_time"],
+                "process_wall_time": time.perf_counter() - t_start,
+            },
+        }
+
+
+def run_hybrid_deployment(
+    config: Config,
+    directory: str | Path,
+    model,
+    coiling=None,
+    comm=MPI.COMM_WORLD,
+    progress: bool = True,
+    stop=None,
+    resume: str | Path | None = None,
+) -> dict:
+    """Deploy ``coiling``'s tape (a coiled :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`)
+    with the hybrid into ``directory``, its files written through ``model``'s full shell (the
+    settled stowed :class:`~tapecoil.phases.coiling.CoilingModel`); returns the phase summary.
+    ``resume``: a deployment checkpoint; a completed hybrid one gives its summary again; else the
+    deployment starts from the release (``coiling`` is then needed)."""
+    from tapecoil.core.checkpoint import read_meta
+
+    t_start = time.perf_counter()
+    if resume is not None:
+        meta = read_meta(resume)
+        restart = meta.get("run") or {}
+        if meta.get("completed") and restart.get("model") == "hybrid":
+            LOG.info("hybrid deployment: completed in %s", resume)
+            phase = HybridDeploymentPhase(config, model, restart=restart)
+            return phase.summary(None, t_start)
+        LOG.warning("hybrid deployment: %s cannot be continued; deploying again from the release", resume)
+    if coiling is None:
+        raise ValueError("the hybrid deploys the tape its own coiling left: coil with the hybrid first")
+    phase = HybridDeploymentPhase(config, model, coiling, stop=stop)
+    return run_phase(phase, directory, config, comm, model.model, None, progress, t_start)
