@@ -116,6 +116,18 @@ def test_integer_accepted_for_float(tmp_path):
             r"model\.kind = 'hybrid' needs mesh\.grading = 1",
         ),
         (
+            {"model": {"kind": "hybrid"}, "deployment": {"hub": "free"}},
+            r"model\.kind = 'hybrid' needs deployment\.hub = 'fixed'",
+        ),
+        (
+            {"model": {"kind": "hybrid"}, "deployment": {"gravity": [0.0, 0.0, -9.81]}},
+            r"model\.kind = 'hybrid' needs deployment\.gravity = \[0, 0, 0\]",
+        ),
+        (
+            {"model": {"kind": "hybrid"}, "deployment": {"rho_inf": 1.0}},
+            r"model\.kind = 'hybrid' needs deployment\.rho_inf < 1",
+        ),
+        (
             {"model": {"kind": "hybrid", "window_ahead": 0.5}},
             r"model\.window_ahead \+ model\.window_behind = 0\.525 m must be shorter than the tape",
         ),

@@ -144,6 +144,9 @@ def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path)
 
         page = write_report(out, pictures=False).read_text()
         assert "coiling (hybrid)" in page and "settled there in" in page
+        assert "deployment (hybrid)" in page and "Deployed by the hybrid" in page
+        assert (out / "figures" / "deployment_energies.png").is_file()
+        assert not (out / "figures" / "deployment_root_loads.png").exists()
         assert (out / "figures" / "coiling_forces.png").is_file()
 
     again = run(config, out, phases=("coiling",), resume=True, progress=False)

@@ -127,8 +127,8 @@ def _model_option(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--model",
         choices=("shell", "hybrid"),
-        help="the coiling's model, model.kind (overrides the file): the full shell, or the "
-        "shell-beam hybrid (its stowed state and the deployment are the full shell's)",
+        help="the tape's model, model.kind (overrides the file): the full shell, or the "
+        "shell-beam hybrid (it coils and deploys; its stowed state is the full shell's)",
     )
 
 

@@ -1,5 +1,5 @@
-"""The [model] table: the tape's structural model in coiling, and what the hybrid needs of
-the other tables."""
+"""The [model] table: the tape's structural model, and what the hybrid needs of the other
+tables."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from tapecoil.config.params import POSITIVE, ConfigError, param
 
 @dataclass
 class ModelConfig:
-    """The tape's structural model in coiling.
+    """The tape's structural model in coiling and deployment.
 
     Attributes:
         kind: 'shell' (the Naghdi shell over the whole tape) or 'hybrid' (shell on a window
@@ -19,7 +19,9 @@ class ModelConfig:
             docs/hybrid.md). The hybrid coils in the opposite sense on the spiral of turns
             (contact.turns = 'spiral'), on an ungraded mesh (mesh.grading = 1). Its coiled state
             is carried into the full shell and settled there by one solve at the final hub
-            angle: the stowed state, and the deployment from it, are the full shell's.
+            angle (the stowed state); the hybrid then deploys from its own coiled state, its
+            window following the lift-off, with the hub held (deployment.hub = 'fixed'),
+            without gravity, by generalized-alpha (deployment.rho_inf < 1).
         window_ahead: the hybrid's shell beyond the lift-off point [m] (the ploy region and a
             margin).
         window_behind: the hybrid's shell on the coil behind the lift-off point [m].
@@ -64,6 +66,21 @@ def check_model(config) -> None:
             config.mesh.grading == 1.0,
             "mesh.grading = 1",
             "its shell and beams share their nodes along the tape",
+        ),
+        (
+            config.deployment.hub == "fixed",
+            "deployment.hub = 'fixed'",
+            "its deployment holds the hub (a free hub's equation is the full shell's)",
+        ),
+        (
+            not any(config.deployment.gravity),
+            "deployment.gravity = [0, 0, 0]",
+            "its deployment has no weight",
+        ),
+        (
+            config.deployment.rho_inf < 1.0,
+            "deployment.rho_inf < 1",
+            "it deploys by generalized-alpha (the energy-conserving scheme is the full shell's)",
         ),
     )
     for ok, setting, why in needs:

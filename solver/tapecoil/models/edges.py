@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import dolfinx
 import numpy as np
 
+from tapecoil.core.dofs import owned_subspace_dofs
 from tapecoil.core.rotation import rotation_matrix
 from tapecoil.models.shell import NaghdiShell
 
@@ -28,6 +29,12 @@ def facet_condition(model: NaghdiShell, sub: tuple[int, ...], facets: np.ndarray
     dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), model.mesh.topology.dim - 1, facets)
     value = dolfinx.fem.Function(collapsed)
     return value, dolfinx.fem.dirichletbc(value, dofs, space)
+
+
+def owned_edge_dofs(model: NaghdiShell, tag: int, sub: tuple[int, ...]) -> np.ndarray:
+    """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
+    facets = model.strip.facet_tags.find(tag)
+    return owned_subspace_dofs(model.W, sub, model.mesh.topology.dim - 1, facets)
 
 
 def edge_conditions(model: NaghdiShell, tag: int):

@@ -21,13 +21,14 @@ from tapecoil.config import Config
 from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import global_scalar, owned_subspace_dofs
+from tapecoil.core.dofs import global_scalar
 from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_strip_mesh
 from tapecoil.geometry.sections import CircularArcSection
 from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact, default_penalty
 from tapecoil.hub.frame import HubFrame
+from tapecoil.models.edges import owned_edge_dofs
 from tapecoil.models.shell import NaghdiShell, shell_material
 from tapecoil.phases import centre_line as centre
 from tapecoil.phases.turn_contact import TurnContact
@@ -91,8 +92,7 @@ class TapeOnHub:
 
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
-        facets = self.strip.facet_tags.find(tag)
-        return owned_subspace_dofs(self.model.W, sub, self.model.mesh.topology.dim - 1, facets)
+        return owned_edge_dofs(self.model, tag, sub)
 
     def energies(self) -> dict[str, float]:
         comm = self.model.mesh.comm

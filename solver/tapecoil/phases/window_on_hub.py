@@ -21,7 +21,7 @@ from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact
 from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.section_forces import SectionForces
-from tapecoil.models.edges import facet_condition
+from tapecoil.models.edges import facet_condition, owned_edge_dofs
 from tapecoil.models.materials import shell_material
 from tapecoil.models.nodes import Nodes
 from tapecoil.models.problem import ShellProblem
@@ -122,8 +122,7 @@ class WindowOnHub(ShellProblem):
 
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
-        facets = self.strip.facet_tags.find(tag)
-        return owned_subspace_dofs(self.model.W, sub, self.model.mesh.topology.dim - 1, facets)
+        return owned_edge_dofs(self.model, tag, sub)
 
     def section_forces(self) -> dict:
         """The window's section forces along the tape

@@ -143,8 +143,16 @@ def _run_table(summary: dict) -> str:
             f"{settling['newton_iterations']} Newton iterations: strain energy "
             f"{settling['strain_energy_hybrid']:.6g} J in the hybrid, "
             f"{settling['strain_energy_settled']:.6g} J settled, the nodes moved by at most "
-            f"{1e3 * settling['largest_displacement']:.3g} mm. The stowed state, the coil's measures "
-            "and the deployment are the full shell's.</p>"
+            f"{1e3 * settling['largest_displacement']:.3g} mm. The stowed state and the coil's "
+            "measures are the full shell's.</p>"
+        )
+    deployment = summary.get("deployment", {}).get("run", {})
+    if deployment.get("model") == "hybrid":
+        lines.append(
+            "<p>Deployed by the hybrid from its own coiled state, its shell window following the "
+            f"lift-off down the coil ({deployment['window_moves']} moves; DOFs above at their "
+            "most). The pictures and snapshots are the hybrid's state carried into the full "
+            "shell; the root's loads are not measured.</p>"
         )
     return "\n".join(lines)
 
