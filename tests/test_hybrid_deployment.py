@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 from scipy.spatial.transform import Rotation
+from test_hybrid_coiling import coarse  # the coarse benchmark coiled to a hub angle
 
 from tapecoil.config import Config
 from tapecoil.models.nodes import Nodes, angles_of
@@ -17,15 +18,6 @@ SPIN = np.array([3.0, -7.0, 11.0])
 CENTRE = np.array([0.02, -0.01, 0.03])
 # the shell's director-angle rates of the spin, by central differences over this turn [rad]
 TURN = 1e-4
-
-
-def coarse(angle: float) -> Config:
-    config = Config()
-    return dataclasses.replace(
-        config,
-        mesh=dataclasses.replace(config.mesh, preset="coarse"),
-        coiling=dataclasses.replace(config.coiling, hub_angle=angle),
-    )
 
 
 def _skew(w):

@@ -222,30 +222,17 @@ class DeploymentPhase(Phase):
         model, history = self.model, self.history
         comm, res = model.comm, model.tape.strip.resolution
         timing = model.solver.timing_per_iteration()
-        steps = history[1:]
         return {
-            "completed": self.completed,
-            "message": self.message,
-            "interrupted": None if interrupted is None else interrupted.name,
-            "time": history[-1]["time"],
-            "lambda": history[-1]["lambda"],
-            "rho_inf": model.rho_inf,
-            "scheme": model.scheme,
-            "measures": deployment_measures(model.config, history),
+            **deployment_summary(self, interrupted, model.config, model.rho_inf, model.scheme),
             # the peaks of the force [N], moment and torque [N m] the tape puts on the hub at the root
             **root_load_peaks(history),
             "run": {
                 "ranks": comm.size,
                 "dofs": global_size(model.model.W),
                 "mesh": f"{res.along} x {res.across}",
-                "steps": len(steps),
-                "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
+                **step_figures(history),
                 # this process's, including the attempts that failed and were cut back
                 "newton_iterations_total": int(model.solver.timings["iterations"]),
-                "cutbacks": int(sum(r["cutbacks"] for r in steps)),
-                "rejected_steps": int(sum(r["rejected_steps"] for r in steps)),
-                "smallest_step": min((r["step"] for r in steps), default=0.0),
-                "largest_step": max((r["step"] for r in steps), default=0.0),
                 "max_penetration": max(r["max_penetration"] for r in history),
                 "wall_time": history[-1]["wall_time"],
                 "process_wall_time": time.perf_counter() - t_start,
@@ -253,6 +240,36 @@ class DeploymentPhase(Phase):
                 "linear_solve_per_iteration": timing["linear_solve"],
             },
         }
+
+
+def deployment_summary(phase: Phase, interrupted, config: Config, rho_inf: float, scheme: str) -> dict:
+    """The head of a deployment phase's summary (either model's): its state, where it ended, the
+    scheme, and the measures against the theory from its history."""
+    history = phase.history
+    return {
+        "completed": phase.completed,
+        "message": phase.message,
+        "interrupted": None if interrupted is None else interrupted.name,
+        "time": history[-1]["time"],
+        "lambda": history[-1]["lambda"],
+        "rho_inf": rho_inf,
+        "scheme": scheme,
+        "measures": deployment_measures(config, history),
+    }
+
+
+def step_figures(history: list[dict]) -> dict:
+    """A deployment history's steps (the rows after the release's): their count, Newton
+    iterations, cut-backs, rejected attempts, smallest and largest step [s]."""
+    steps = history[1:]
+    return {
+        "steps": len(steps),
+        "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
+        "cutbacks": int(sum(r["cutbacks"] for r in steps)),
+        "rejected_steps": int(sum(r["rejected_steps"] for r in steps)),
+        "smallest_step": min((r["step"] for r in steps), default=0.0),
+        "largest_step": max((r["step"] for r in steps), default=0.0),
+    }
 
 
 def run_deployment(

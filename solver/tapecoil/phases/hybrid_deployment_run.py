@@ -23,7 +23,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from tapecoil.config import Config
-from tapecoil.measures.deployment import deployment_measures
+from tapecoil.phases.deployment_run import deployment_summary, step_figures
 from tapecoil.phases.hybrid_deployment import DeploymentRecord, HybridDeployment
 from tapecoil.phases.runner import LOG, Phase, run_phase
 
@@ -146,28 +146,15 @@ class HybridDeploymentPhase(Phase):
         hybrid's history, and the run's figures."""
         history = self.history
         res = self.model.tape.strip.resolution
-        steps = history[1:]
         placed = self.placed_settling
         return {
-            "completed": self.completed,
-            "message": self.message,
-            "interrupted": None if interrupted is None else interrupted.name,
-            "time": history[-1]["time"],
-            "lambda": history[-1]["lambda"],
-            "rho_inf": self.config.deployment.rho_inf,
-            "scheme": "alpha",
-            "measures": deployment_measures(self.config, history),
+            **deployment_summary(self, interrupted, self.config, self.config.deployment.rho_inf, "alpha"),
             "run": {
                 "model": "hybrid",
                 "ranks": self.comm.size,
                 "dofs": self.dofs,
                 "mesh": f"{res.along} x {res.across}",
-                "steps": len(steps),
-                "newton_iterations": int(sum(r["newton_iterations"] for r in steps)),
-                "cutbacks": int(sum(r["cutbacks"] for r in steps)),
-                "rejected_steps": int(sum(r["rejected_steps"] for r in steps)),
-                "smallest_step": min((r["step"] for r in steps), default=0.0),
-                "largest_step": max((r["step"] for r in steps), default=0.0),
+                **step_figures(history),
                 "window_moves": max(len(self.moves) - 1, 0),
                 "placed_sections_settled": {
                     "newton_iterations": int(sum(p["iterations"] for p in placed)),
