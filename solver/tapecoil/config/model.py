@@ -51,6 +51,20 @@ def check_model(config) -> None:
                     f"leave model.{f.name} out"
                 )
         return
+    why = hybrid_refusal(config)
+    if why is not None:
+        raise ConfigError(why)
+    window = model.window_ahead + model.window_behind
+    if window >= config.tape.L:
+        raise ConfigError(
+            f"model.window_ahead + model.window_behind = {window:g} m must be shorter than the tape "
+            f"(tape.L = {config.tape.L:g} m): the hybrid's shell is a window of it"
+        )
+
+
+def hybrid_refusal(config) -> str | None:
+    """Why the hybrid cannot coil and deploy the tape of ``config`` (the first setting it needs
+    and does not have), or None."""
     needs = (
         (
             config.coiling.sense == "opposite",
@@ -83,12 +97,6 @@ def check_model(config) -> None:
             "it deploys by generalized-alpha (the energy-conserving scheme is the full shell's)",
         ),
     )
-    for ok, setting, why in needs:
-        if not ok:
-            raise ConfigError(f"model.kind = 'hybrid' needs {setting}: {why}")
-    window = model.window_ahead + model.window_behind
-    if window >= config.tape.L:
-        raise ConfigError(
-            f"model.window_ahead + model.window_behind = {window:g} m must be shorter than the tape "
-            f"(tape.L = {config.tape.L:g} m): the hybrid's shell is a window of it"
-        )
+    return next(
+        (f"model.kind = 'hybrid' needs {setting}: {why}" for ok, setting, why in needs if not ok), None
+    )

@@ -43,6 +43,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
+from tapecoil.config.model import hybrid_refusal
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import global_scalar, global_size, owned_size
 from tapecoil.core.newton import SNESSolver
@@ -161,21 +162,15 @@ class HybridDeployment:
     options under ``hybrid_deploy<k>_``, k the window's number from 0; ``solver.petsc_options``
     and ``deployment.petsc_options`` reach all of them."""
 
-    def __init__(self, coiling, rho_inf: float | None = None):
+    def __init__(self, coiling):
         self.coiling = coiling
         self.config = cfg = coiling.config
         self.comm = coiling.comm
         d = cfg.deployment
-        if d.hub != "fixed":
-            raise ValueError("the hybrid deploys with the hub held: deployment.hub must be 'fixed'")
-        if np.any(np.asarray(d.gravity, dtype=float)):
-            raise ValueError("the hybrid deploys without gravity: deployment.gravity must be zero")
-        if d.rho_inf >= 1.0 and rho_inf is None:
-            raise ValueError(
-                "the hybrid deploys with generalized-alpha: deployment.rho_inf must be below 1 "
-                "(the energy-conserving scheme is the full shell's)"
-            )
-        self.rho_inf = d.rho_inf if rho_inf is None else rho_inf
+        why = hybrid_refusal(cfg)
+        if why is not None:
+            raise ValueError(why)
+        self.rho_inf = d.rho_inf
         self.angle = coiling.angle
         tp = cfg.tape
         arc = BeamSection.circular_arc(tp.R, tp.alpha, tp.h, tp.E, tp.nu)
