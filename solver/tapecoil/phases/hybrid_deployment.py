@@ -151,7 +151,8 @@ def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
 
 
 class _Restart(Exception):
-    """Raised from the step callback to rebuild the time stepping (a window move, a stop)."""
+    """Raised from the step callback to leave the time stepping: after a window move (to step
+    on with the new hybrid) or once deployed."""
 
 
 class HybridDeployment:
@@ -322,9 +323,7 @@ class HybridDeployment:
         rates = motion.rates()
         before = self.energies()
         # the fastest node's speed (the translations'; the directors' angles may spin fast)
-        speeds = [rates[0][dofs] for dofs in (Nodes(old.shell.model).u_dofs,)] + [
-            rates[2][old.beam.model.node_u_dofs]
-        ]
+        speeds = (rates[0][Nodes(old.shell.model).u_dofs], rates[2][old.beam.model.node_u_dofs])
         fastest = self.comm.allreduce(max(float(np.abs(v).max(initial=0.0)) for v in speeds), op=MPI.MAX)
         probe = PROBE_SHARE * self.coiling.element / max(fastest, 1e-3)
         new = self.coiling.build(start, self._name(), released=True)
