@@ -24,6 +24,11 @@ from tapecoil.verification.checks import CaseResult, Check
 DEPLOY_ANGLE = 36.0
 # the deployed fractions at which the two deployments' times are compared
 FRACTIONS = (0.5, 0.9, 1.0)
+# the times to those fractions, hybrid against full shell. The full shell's own time to
+# lambda = 0.9 moves by 0.34 % between two stowed states microns apart (the deployment snaps and
+# rattles its turns; docs/hybrid.md), and the hybrid's window moves add the strain of the
+# sections turned into beam; measured 0.18 to 0.26 % (coarse) and 0.23 to 0.36 % (default)
+TIME_TOLERANCE = 2e-2
 
 
 def deploy_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_WORLD) -> dict:
@@ -110,9 +115,8 @@ def time_to(side: dict, fraction: float) -> float | None:
 
 def hybrid_deploy(config: Config, preset: str = "coarse", angle: float = DEPLOY_ANGLE, comm=MPI.COMM_WORLD):
     """``hybrid-deploy``: :func:`deploy_side_by_side` to ``angle`` [rad]: the hybrid's times to
-    lambda = 0.5, 0.9 and 1 within 2 % of the full shell's (the issue of the window's moves and
-    its placed sections; measured in docs/hybrid.md), both deployments complete; DOFs, steps,
-    Newton iterations and wall times in the info."""
+    lambda = 0.5, 0.9 and 1 within TIME_TOLERANCE of the full shell's, both deployments
+    complete; DOFs, steps, Newton iterations and wall times in the info."""
     both = deploy_side_by_side(config, preset, angle, comm)
     hybrid, full = both["hybrid"], both["full_shell"]
     checks = [
@@ -139,8 +143,3 @@ def hybrid_deploy(config: Config, preset: str = "coarse", angle: float = DEPLOY_
         },
     }
     return CaseResult("hybrid-deploy", checks, info)
-
-
-# the times to a deployed fraction, hybrid against full shell: the window's moves release the
-# placed sections' strain (docs/hybrid.md); measured on the coarse mesh below 1 %
-TIME_TOLERANCE = 2e-2
