@@ -51,9 +51,9 @@ def check_model(config) -> None:
                     f"leave model.{f.name} out"
                 )
         return
-    why = hybrid_refusal(config)
-    if why is not None:
-        raise ConfigError(why)
+    need = hybrid_need(config)
+    if need is not None:
+        raise ConfigError(f"model.kind = 'hybrid' needs {need}")
     window = model.window_ahead + model.window_behind
     if window >= config.tape.L:
         raise ConfigError(
@@ -62,9 +62,9 @@ def check_model(config) -> None:
         )
 
 
-def hybrid_refusal(config) -> str | None:
-    """Why the hybrid cannot coil and deploy the tape of ``config`` (the first setting it needs
-    and does not have), or None."""
+def hybrid_need(config) -> str | None:
+    """The first setting the hybrid needs to coil and deploy the tape of ``config`` and does not
+    have, with the reason ("key = value: why"), or None."""
     needs = (
         (
             config.coiling.sense == "opposite",
@@ -97,6 +97,4 @@ def hybrid_refusal(config) -> str | None:
             "it deploys by generalized-alpha (the energy-conserving scheme is the full shell's)",
         ),
     )
-    return next(
-        (f"model.kind = 'hybrid' needs {setting}: {why}" for ok, setting, why in needs if not ok), None
-    )
+    return next((f"{setting}: {why}" for ok, setting, why in needs if not ok), None)

@@ -398,6 +398,16 @@ class HybridCoiling:
         contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
         contact.update(self.angle)
 
+    def carry_winding(self, old: HybridProblem, new: HybridProblem) -> None:
+        """The winding angles of ``new``'s beam and shell (a hybrid ``old``'s state was carried
+        into) from ``old``'s centre line at this coiling's hub angle (collective)."""
+        x, points = centre_line(old)
+        psi = winding_along(self.frame, self.angle, points)
+        new.beam.set_winding(lambda s: np.interp(s, x, psi))
+        contact = new.shell.contact
+        contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
+        contact.update(self.angle)
+
     def _move_window(self) -> None:
         tp = self.config.tape
         start, end = self._ends(self.hybrid.shell.surface.xi_range[0][0])
@@ -411,13 +421,8 @@ class HybridCoiling:
         if new_start <= start:
             return
         old = self.hybrid
-        x, points = centre_line(old)
-        psi = winding_along(self.frame, self.angle, points)
         new = self._build(new_start)
         carry_over(old, new)
-        new.beam.set_winding(lambda s: np.interp(s, x, psi))
-        contact = new.shell.contact
-        contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
-        contact.update(self.angle)
+        self.carry_winding(old, new)
         self.hybrid = new
         self.moves.append((self.angle, *self._ends(new_start)))

@@ -289,7 +289,7 @@ def coil_again(config: Config, comm=MPI.COMM_WORLD) -> HybridCoiling:
     """The hybrid's coiling of ``config`` computed again, without files: the hybrid's own
     coiled state, which a checkpoint of the full shell does not hold (for a deployment by the
     hybrid after a resumed coiling)."""
-    coiling = HybridCoiling(config, comm, window=WindowSettings.from_config(config.model))
+    coiling = HybridCoiling(config, comm)  # the window of config.model
     coiling.flatten()
     coiling.coil(config.coiling.hub_angle)
     return coiling

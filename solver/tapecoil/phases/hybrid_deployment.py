@@ -43,7 +43,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
-from tapecoil.config.model import hybrid_refusal
+from tapecoil.config.model import hybrid_need
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import global_scalar, global_size, owned_size
 from tapecoil.core.newton import SNESSolver
@@ -168,9 +168,9 @@ class HybridDeployment:
         self.config = cfg = coiling.config
         self.comm = coiling.comm
         d = cfg.deployment
-        why = hybrid_refusal(cfg)
-        if why is not None:
-            raise ValueError(why)
+        need = hybrid_need(cfg)
+        if need is not None:
+            raise ValueError(f"the hybrid deploys only with {need}")
         self.rho_inf = d.rho_inf
         self.angle = coiling.angle
         tp = cfg.tape
@@ -191,7 +191,7 @@ class HybridDeployment:
         # the window reaches the free end, whose hold the release lets go
         self.hybrid = coiling.build(start, self._name(), released=True, end=tp.L)
         carry_over(old, self.hybrid)
-        self._set_winding(old, self.hybrid)
+        coiling.carry_winding(old, self.hybrid)
         self.hold = None
         self.motion = self._motion(self.hybrid, release=True)
         self.moves.append((0.0, *self.window()))
@@ -203,14 +203,6 @@ class HybridDeployment:
     def window(self) -> tuple[float, float]:
         (start, end), _ = self.hybrid.shell.surface.xi_range
         return float(start), float(end)
-
-    def _set_winding(self, old, new) -> None:
-        x, points = centre_line(old)
-        psi = winding_along(self.coiling.frame, self.angle, points)
-        new.beam.set_winding(lambda s: np.interp(s, x, psi))
-        contact = new.shell.contact
-        contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
-        contact.update(self.angle)
 
     def _motion(self, hybrid, release: bool) -> HybridMotion:
         cfg = self.config
@@ -328,7 +320,7 @@ class HybridDeployment:
         probe = PROBE_SHARE * self.coiling.element / max(fastest, 1e-3)
         new = self.coiling.build(start, self._name(), released=True)
         new_rates = carry_motion(old, new, rates, probe)
-        self._set_winding(old, new)
+        self.coiling.carry_winding(old, new)
         settling = settle_placed(new, old.shell.surface.xi_range[0], self.config)
         motion.destroy()
         self.hold = None  # moved after the release: the end is free

@@ -30,15 +30,13 @@ def not_applicable(name: str, config) -> str | None:
     beam takes an isotropic arc section; its coiling is the opposite sense's, on the spiral."""
     if name.startswith("hybrid-") and config.laminate.kind != "isotropic":
         return "the hybrid's beam takes an isotropic arc section, and this tape's wall is laminated"
-    coils = name in ("hybrid-coil", "hybrid-deploy")
-    if coils and config.coiling.sense != "opposite":
+    if name == "hybrid-coil" and config.coiling.sense != "opposite":
         return "the hybrid coils in the opposite sense only, and this tape is coiled in the equal sense"
-    if coils and config.contact.turns != "spiral":
+    if name == "hybrid-coil" and config.contact.turns != "spiral":
         return "the hybrid's beam rests on the spiral of turns, and this run's turns touch by their surfaces"
-    if name == "hybrid-deploy" and config.deployment.hub != "fixed":
-        return "the hybrid deploys from a held hub, and this run's hub turns freely"
-    if name == "hybrid-deploy" and any(config.deployment.gravity):
-        return "the hybrid deploys without gravity, and this run has gravity"
-    if name == "hybrid-deploy" and config.deployment.rho_inf >= 1.0:
-        return "the hybrid deploys by generalized-alpha, and this run asks for the conserving scheme"
+    if name == "hybrid-deploy":
+        from tapecoil.config.model import hybrid_need
+
+        need = hybrid_need(config)
+        return None if need is None else f"the hybrid coils and deploys only with {need}"
     return None
