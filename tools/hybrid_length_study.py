@@ -7,18 +7,31 @@ length, outer radius, outer turn's coiling tension, free part's height, DOFs, st
 iterations and wall time (docs/hybrid.md, "Cost against the tape's length"); ``--json FILE``
 also writes them there, for tools/hybrid_length_plot.py.
 
+With ``--deploy`` the hybrid coils and then deploys to ``--lambda-end``, and the full shell
+deploys from the hybrid's coil settled in it (``verification.hybrid_deploy.deploy_side_by_side``;
+``--hybrid-only`` leaves the full shell out). The deployment's simulated time is scaled with the
+modified ODE's (t ~ L^2): t_end is 1.5 times its time to lambda_end. Printed beside the hybrid's:
+the stowed strain energy against the plate estimate (``theory.stored_energy``, which leaves out
+the ploy region and the free edges' relief), the time to lambda = 0.9 against the modified ODE
+with the plate energy (physics.md Sec. 6), and the coiling's and the deployment's wall times.
+
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/hybrid_length_study.py 1.0
+    tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/hybrid_length_study.py 2.0 \
+        --deploy --lambda-end 0.9 --hybrid-only --json deploy_L2.0.json
 """
 
 import argparse
 import dataclasses
 import json
 
+import numpy as np
 from mpi4py import MPI
 
 from tapecoil import theory
 from tapecoil.config import Config
+from tapecoil.measures.deployment import deployment_reference
 from tapecoil.verification.hybrid_coil import coil_side_by_side
+from tapecoil.verification.hybrid_deploy import deploy_side_by_side, time_to
 
 FREE = 0.031  # [m] the benchmark's 0.5 m at 36 rad leaves 31 mm off the coil
 
@@ -26,6 +39,15 @@ parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("length", type=float, help="tape length L [m]")
 parser.add_argument("mesh", nargs="?", default="default", choices=("coarse", "default", "fine"))
 parser.add_argument("--json", help="write the results to this file as well")
+parser.add_argument(
+    "--deploy", action="store_true", help="coil with the hybrid, then deploy with both models"
+)
+parser.add_argument(
+    "--lambda-end", type=float, default=1.0, help="with --deploy: the deployed fraction to stop at"
+)
+parser.add_argument(
+    "--hybrid-only", action="store_true", help="with --deploy: leave the full shell's deployment out"
+)
 args = parser.parse_args()
 if not args.length > 2 * FREE:
     raise SystemExit(f"the tape must be longer than {2 * FREE} m, got {args.length}")
@@ -37,6 +59,66 @@ config = dataclasses.replace(
     tape=dataclasses.replace(config.tape, L=args.length),
     coiling=dataclasses.replace(config.coiling, hub_angle=angle),
 )
+
+
+def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool) -> None:
+    """Coil with the hybrid and deploy with it (and the full shell); print, and write --json."""
+    lam0 = 1.0 - theory.coiled_length_from_rotation(angle, config.hub.radius, config.tape.h) / config.tape.L
+    expected = deployment_reference(config, lam0, energy="plate")
+    t_end = 1.5 * float(np.interp(lambda_end, expected.lam, expected.t))
+    config = dataclasses.replace(
+        config, deployment=dataclasses.replace(config.deployment, t_end=t_end, lambda_end=lambda_end)
+    )
+    config.check()
+    both = deploy_side_by_side(config, mesh, angle, full_shell=full_shell)
+    tp = config.tape
+    plate = theory.stored_energy(
+        angle, config.hub.radius, tp.h, tp.R, tp.alpha, config.wall.bending, config.coiling.sense
+    )
+    sides = ["hybrid", "full_shell"] if full_shell else ["hybrid"]
+    rows = {}
+    for side in sides:
+        run = both[side]
+        rows[side] = {
+            "stowed_energy": float(run["strain_energy"][0]),
+            "time_to_0.9": time_to(run, 0.9),
+            f"time_to_{lambda_end:g}": time_to(run, lambda_end),
+            "completed": bool(run["completed"]),
+            "dofs": run["dofs"],
+            "steps": run["steps"],
+            "newton_iterations": run["newton_iterations"],
+            "wall_time": run["wall_time"],
+        }
+    # the modified ODE from the hybrid's own deployed fraction at release
+    plate_ode = deployment_reference(config, float(both["hybrid"]["lambda"][0]), energy="plate")
+    rows["hybrid"]["stopped"] = both["hybrid"]["stopped"]
+    rows["hybrid"]["coiling_wall_time"] = both["hybrid"]["coiling_wall_time"]
+    rows["hybrid"]["coiling_steps"] = both["hybrid"]["coiling_steps"]
+    rows["hybrid"]["window_moves"] = len(both["moves"]) - 1
+    reference = {"plate_stored_energy": plate, "plate_ode_time_to_0.9": plate_ode.t90, "t_end": t_end}
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    ranks = MPI.COMM_WORLD.size
+    print(f"L = {tp.L:g} m, hub angle {angle:.4g} rad, lambda0 {lam0:.4f}, mesh {mesh}, {ranks} rank(s)")
+    for side, row in rows.items():
+        print(side)
+        for key, value in row.items():
+            print(f"  {key:<24} {value}")
+    hybrid = rows["hybrid"]
+    print(f"stowed energy / plate estimate      {hybrid['stowed_energy'] / plate:.5f} ({plate:.5g} J)")
+    if hybrid["time_to_0.9"] is not None:
+        ratio = hybrid["time_to_0.9"] / plate_ode.t90
+        print(f"time to 0.9 / modified ODE (plate)  {ratio:.5f} ({plate_ode.t90:.5g} s)")
+    print(f"coiling + deployment wall [s]       {hybrid['coiling_wall_time'] + hybrid['wall_time']:.1f}")
+    if args.json:
+        record = {"length": tp.L, "hub_angle": angle, "mesh": mesh, "ranks": ranks}
+        with open(args.json, "w") as f:
+            json.dump({**record, "lambda_end": lambda_end, **reference, **rows}, f, indent=1)
+
+
+if args.deploy:
+    deploy(config, args.mesh, angle, args.lambda_end, not args.hybrid_only)
+    raise SystemExit(0)
 both = coil_side_by_side(config, args.mesh, angle)
 if MPI.COMM_WORLD.rank == 0:
     print(

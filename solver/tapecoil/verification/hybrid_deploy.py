@@ -16,6 +16,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.core.stepping import ContinuationError
 from tapecoil.measures.deployment import at_crossing
 from tapecoil.verification.checks import CaseResult, Check
 
@@ -31,13 +32,17 @@ FRACTIONS = (0.5, 0.9, 1.0)
 TIME_TOLERANCE = 2e-2
 
 
-def deploy_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_WORLD) -> dict:
+def deploy_side_by_side(
+    config: Config, preset: str, angle: float, comm=MPI.COMM_WORLD, full_shell: bool = True
+) -> dict:
     """``config``'s tape on the mesh ``preset`` coiled to ``angle`` [rad] by the hybrid, then
-    deployed to ``deployment.lambda_end`` by the hybrid and, from the hybrid's coil settled in
-    the full shell, by the full shell. Returns for each (``"hybrid"``, ``"full_shell"``) the
-    times [s], deployed fractions, strain and kinetic energies [J] of its steps, its DOFs,
-    steps, Newton iterations and wall time [s] of the deployment; and the hybrid's window moves
-    (time, start, end), their settling figures and its rows' energies (collective)."""
+    deployed to ``deployment.lambda_end`` by the hybrid and (``full_shell``), from the hybrid's
+    coil settled in the full shell, by the full shell. Returns for each (``"hybrid"``,
+    ``"full_shell"``) the times [s], deployed fractions, strain and kinetic energies [J] of its
+    steps, its DOFs, steps, Newton iterations and wall time [s] of the deployment; the hybrid's
+    message if it stopped before ``lambda_end`` (its rows up to there kept), its
+    coiling's wall time [s] and steps, its window moves (time, start, end), their settling
+    figures and its rows' energies (collective)."""
     from tapecoil.phases.coiling import CoilingModel
     from tapecoil.phases.deployment import DeploymentModel
     from tapecoil.phases.deployment_run import DeploymentRun
@@ -50,14 +55,20 @@ def deploy_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM
         mesh=dataclasses.replace(config.mesh, preset=preset),
         coiling=dataclasses.replace(config.coiling, hub_angle=angle),
     )
+    t0 = time.perf_counter()
     coiling = HybridCoiling(case, comm)
     coiling.flatten()
     coiling.coil(angle)
+    coiling_wall = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     deployment = HybridDeployment(coiling)
     first = deployment.record()
-    outcome = deployment.run()
+    stopped = None
+    try:
+        outcome = deployment.run()
+    except ContinuationError as error:  # the last converged state is kept: report how far it got
+        outcome, stopped = "stopped", str(error)
     hybrid_wall = time.perf_counter() - t0
     records = [first, *deployment.records]
     results = {
@@ -67,10 +78,13 @@ def deploy_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM
             "strain_energy": np.array([r.strain_energy for r in records]),
             "kinetic_energy": np.array([r.kinetic_energy for r in records]),
             "completed": outcome == "deployed",
+            "stopped": stopped,
             "dofs": deployment.dofs(),
             "steps": len(deployment.records),
             "newton_iterations": sum(r.iterations for r in deployment.records),
             "wall_time": hybrid_wall,
+            "coiling_wall_time": coiling_wall,
+            "coiling_steps": len(coiling.records),
         },
         "moves": [list(m) for m in deployment.moves],
         "placed_settling": deployment.placed_settling,
@@ -79,6 +93,8 @@ def deploy_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM
         ],
     }
     deployment.destroy()
+    if not full_shell:
+        return results
 
     model = CoilingModel(case, comm)
     coiling.carry_into(model)
