@@ -136,7 +136,7 @@ def test_the_hybrid_deploys_the_benchmark_as_the_full_shell_does():
     assert len(result.info["moves"]) > 3  # the window went down the coil
 
 
-def short_deployment(comm, t_end=0.02):
+def short_deployment(comm, t_end=0.02, run=True):
     from tapecoil.phases.hybrid_deployment import HybridDeployment
 
     config = coarse(4.5)
@@ -145,8 +145,48 @@ def short_deployment(comm, t_end=0.02):
     coiling.flatten()
     coiling.coil(4.5)
     deployment = HybridDeployment(coiling)
-    deployment.run()
+    if run:
+        deployment.run()
     return deployment
+
+
+def test_the_hybrid_stops_where_the_coil_loosens_behind_its_window():
+    """The flattened beam behind the window lifted off its turn by three thicknesses (its nodes
+    moved radially, the root's quarter of it apart): the steps' reading finds the gap, read from
+    the beam's nodes against the spiral, and the run stops within the release's first steps with
+    a message naming the place, its last converged state kept."""
+    from tapecoil.phases.hybrid_deployment import CoilLoosening
+
+    deployment = short_deployment(MPI.COMM_WORLD, t_end=0.002, run=False)
+    h = deployment.config.tape.h
+    start = deployment.window()[0]
+    assert start > 0.02  # there is beam behind the window, on the coil
+    assert deployment.lift_off()["beam_gap"] < h  # resting on its turn (0.53 h at most)
+    beam = deployment.hybrid.beam.model
+    frame = deployment.coiling.frame
+    points = beam.node_points + beam.q.x.array[beam.node_u_dofs]
+    radial = points - np.asarray(frame.axis_point)
+    radial[:, 1] = 0.0
+    radial /= np.linalg.norm(radial, axis=1)[:, None]
+    lifted = (beam.node_points[:, 0] > 0.25 * start) & (beam.node_points[:, 0] < start - 1e-9)
+    assert MPI.COMM_WORLD.allreduce(int(lifted.sum())) > 0
+    scheme = deployment.motion.beam.scheme  # its last state, from which the step starts
+    for state in (beam.q, scheme.q_old):
+        state.x.array[beam.node_u_dofs[lifted]] += 3.0 * h * radial[lifted]
+        state.x.scatter_forward()
+    with pytest.raises(CoilLoosening, match="the coil loosens behind the hybrid's window") as stopped:
+        deployment.run()
+    assert stopped.value.load == pytest.approx(deployment.time)
+    assert deployment.time < 1e-3  # in the release's first steps (the second, measured)
+    gap, at = deployment.beam_gap
+    assert 2.0 * h < gap < 5.0 * h and 0.25 * start <= at < start  # 3.6 h, measured
+
+
+@pytest.mark.mpi
+def test_the_hybrid_stops_on_every_rank_where_the_coil_loosens():
+    """As above on 2 ranks: the gap is read from the gathered line, so every rank stops."""
+    assert MPI.COMM_WORLD.size > 1
+    test_the_hybrid_stops_where_the_coil_loosens_behind_its_window()
 
 
 @pytest.mark.mpi

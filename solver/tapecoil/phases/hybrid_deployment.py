@@ -30,6 +30,13 @@ sections placed into shell from the flattened beam are then settled (:func:`sett
 The deployed fraction is the full shell's measure (:func:`~tapecoil.measures.deployment.coiled_length`)
 read on the hybrid's centre line: the beam's line and the window's middle line, their inner face
 half a thickness inside them.
+
+The hybrid holds the tape behind the window flat on its turns. Where the coil loosens within
+``window_behind + window_move`` behind the window's start, the stretch that the next moves
+place into shell (the flattened beam lifted off its turn by more than the lift-off gap, as it
+does on the 2 m benchmark tape a third of a second after release), the run stops
+(:class:`CoilLoosening`) with its last converged state rather than place shell sections from
+the twisted, lifted beam.
 """
 
 from __future__ import annotations
@@ -47,7 +54,7 @@ from tapecoil.config.model import hybrid_need
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import global_scalar, global_size, owned_size
 from tapecoil.core.newton import SNESSolver
-from tapecoil.core.stepping import Continuation
+from tapecoil.core.stepping import Continuation, ContinuationError
 from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.nodes import Nodes
@@ -57,7 +64,7 @@ from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.hybrid_motion import HybridMotion
 from tapecoil.phases.release import EndHold, split_state
 
-__all__ = ["DeploymentRecord", "HybridDeployment"]
+__all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment"]
 
 # the rates are carried over a window move along the motion's path over this share of the time
 # an element's length takes at the tape's fastest speed (central differences: their second order
@@ -150,6 +157,13 @@ def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
     }
 
 
+class CoilLoosening(ContinuationError):
+    """The coil loosens behind the window: a stretch of the flattened beam has lifted off its
+    turn by more than the lift-off gap. A tape that leaves the coil takes back its arc section,
+    which the flattened beam cannot do, and a move would place shell sections from it (twisted,
+    into the turns): the hybrid stops there, its last converged state kept."""
+
+
 class _Restart(Exception):
     """Raised from the step callback to leave the time stepping: after a window move (to step
     on with the new hybrid) or once deployed."""
@@ -182,6 +196,8 @@ class HybridDeployment:
         self.options = {"pc_type": "cholesky", **cfg.solver.petsc_options, **d.petsc_options}
         self.time = 0.0
         self.hold_work = 0.0
+        # the flattened beam's largest gap to its turn behind the window [m] and where [m]
+        self.beam_gap = (0.0, 0.0)
         self.records: list[DeploymentRecord] = []
         # each move's settling of the sections placed from the beam (settle_placed's figures)
         self.placed_settling: list[dict] = []
@@ -272,7 +288,17 @@ class HybridDeployment:
         obstacle = self.hybrid.shell.contact.spiral_radius(psi)
         gap = self.coiling.frame.polar(points.T)[0] - 0.5 * tp.h - obstacle
         coiled = coiled_length(x, gap, obstacle, LIFT_OFF_GAP * tp.h)
-        return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+        # the stretch of beam that the next moves place into shell
+        start, reach = self.window()[0], self.coiling.window.behind + self.coiling.move
+        behind = (x < start - 1e-9 * tp.L) & (x > start - reach)
+        loosest = int(np.argmax(np.where(behind, gap, -np.inf))) if behind.any() else None
+        return {
+            "coiled_length": coiled,
+            "lambda": 1.0 - coiled / tp.L,
+            # the flattened beam's largest gap to its turn there [m], and where [m]
+            "beam_gap": float(gap[loosest]) if loosest is not None else 0.0,
+            "beam_gap_at": float(x[loosest]) if loosest is not None else 0.0,
+        }
 
     # -- stepping -------------------------------------------------------------------------------
     def step_error(self) -> float:
@@ -347,6 +373,7 @@ class HybridDeployment:
         :class:`~tapecoil.core.stepping.StepRecord`), or of the release (no step); the wall time
         from ``t0`` (:func:`time.perf_counter`)."""
         reading = self.lift_off()
+        self.beam_gap = (reading["beam_gap"], reading["beam_gap_at"])
         return DeploymentRecord(
             self.time,
             0.0 if step is None else float(step.step),
@@ -391,6 +418,18 @@ class HybridDeployment:
             if record.deployed >= d.lambda_end:
                 outcome = "deployed"
                 raise _Restart
+            gap, at = self.beam_gap
+            if gap > LIFT_OFF_GAP * cfg.tape.h:
+                raise CoilLoosening(
+                    f"the coil loosens behind the hybrid's window at t = {self.time:.6g} s "
+                    f"(lambda = {record.deployed:.4g}): the flattened beam at s = {at:.4g} m has "
+                    f"lifted {gap / cfg.tape.h:.3g} thicknesses off its turn (the window starts at "
+                    f"{self.window()[0]:.4g} m). A tape that leaves the coil takes back its arc "
+                    "section, which the flattened beam cannot; deploy this tape with the full "
+                    "shell (model.kind = 'shell'). Last converged time "
+                    f"{self.time:.6g} s",
+                    self.time,
+                )
             start = self._wanted_start(record.coiled_length)
             if start is not None:
                 self._move(start)
