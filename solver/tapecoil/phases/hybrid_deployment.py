@@ -33,7 +33,7 @@ half a thickness inside them.
 
 The hybrid holds the tape behind the window flat on its turns. Where the coil loosens within
 ``window_behind + window_move`` behind the window's start, the stretch that the next moves
-place into shell (the flattened beam lifted off its turn by more than the lift-off gap, as it
+place into shell (the flattened beam, beyond its first turn, lifted off the turn beneath by more than the lift-off gap, as it
 does on the 2 m benchmark tape a third of a second after release), the run stops
 (:class:`CoilLoosening`) with its last converged state rather than place shell sections from
 the twisted, lifted beam.
@@ -288,9 +288,10 @@ class HybridDeployment:
         obstacle = self.hybrid.shell.contact.spiral_radius(psi)
         gap = self.coiling.frame.polar(points.T)[0] - 0.5 * tp.h - obstacle
         coiled = coiled_length(x, gap, obstacle, LIFT_OFF_GAP * tp.h)
-        # the stretch of beam that the next moves place into shell
+        # the stretch of beam that the next moves place into shell, where it rests on a turn
+        # (on the hub, by the root, the release lifts it by 2 to 2.5 h: docs/hybrid.md)
         start, reach = self.window()[0], self.coiling.window.behind + self.coiling.move
-        behind = (x < start - 1e-9 * tp.L) & (x > start - reach)
+        behind = (x < start - 1e-9 * tp.L) & (x > start - reach) & (psi > 2 * math.pi)
         loosest = int(np.argmax(np.where(behind, gap, -np.inf))) if behind.any() else None
         return {
             "coiled_length": coiled,
