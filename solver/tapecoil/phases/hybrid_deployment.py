@@ -33,8 +33,9 @@ half a thickness inside them.
 
 The hybrid holds the tape behind the window flat on its turns. Where the coil loosens within
 ``window_behind + window_move`` behind the window's start, the stretch that the next moves
-place into shell (the flattened beam, beyond its first turn, lifted off the turn beneath by more than the lift-off gap, as it
-does on the 2 m benchmark tape a third of a second after release), the run stops
+place into shell (the flattened beam, beyond its first turn, lifted off the turn beneath by
+more than the lift-off gap, as it does on the 2 m benchmark tape a third of a second after
+release), the run stops
 (:class:`CoilLoosening`) with its last converged state rather than place shell sections from
 the twisted, lifted beam.
 """
