@@ -2,6 +2,7 @@
 
 import math
 
+import dolfinx
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -248,3 +249,27 @@ def test_two_ranks_roll_up_and_wind_as_one():
     turns_parallel = beam_turns(90, comm=MPI.COMM_WORLD, turns=1).info["ratios"]
     turns_serial = beam_turns(90, comm=MPI.COMM_SELF, turns=1).info["ratios"]
     assert turns_parallel == pytest.approx(turns_serial, rel=1e-9)
+
+
+def test_a_flat_section_on_the_turns_feels_its_edges_where_a_line_does_not():
+    """A straight strip lying along a cylinder's generator, its line touching it, its section
+    turned about the line by phi: with ``half_width`` the one edge that dips into the cylinder
+    gives the energy (k/2) pen^2 / 6 per unit length (Simpson's weight of an edge), pen = r -
+    sqrt(r^2 - 2 r w sin(phi) + w^2) read from the geometry; the line alone feels nothing."""
+    r, w, phi, k, length = 0.02, 0.01, 0.3, 1e9, 1.0
+    section = BeamSection.rectangle(E=1e9, nu=0.3, width=2 * w, depth=1e-3)
+    energies = []
+    for half_width in (None, lambda x: w + 0 * x):
+        problem = BeamProblem(straight_line, length, 4, section, fixed_frame)
+        problem.winding_contact(
+            (0, 0, -r), (1, 0, 0), (0, 0, 1), lambda psi: r + 0 * psi, penalty=k, half_width=half_width
+        )
+        theta = problem.model.node_theta_dofs
+        problem.model.q.x.array[theta[:, 0]] = phi
+        problem.model.q.x.scatter_forward()
+        form = dolfinx.fem.form(sum(problem.energy_terms))
+        energies.append(MPI.COMM_WORLD.allreduce(dolfinx.fem.assemble_scalar(form)))
+    pen = r - math.sqrt(r**2 - 2 * r * w * math.sin(phi) + w**2)
+    assert pen > 1e-4  # the edge is well into the cylinder
+    assert energies[0] == 0.0
+    assert energies[1] == pytest.approx(0.5 * k * pen**2 / 6 * length, rel=1e-10)

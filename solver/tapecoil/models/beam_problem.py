@@ -135,7 +135,14 @@ class BeamProblem:
         self.energy_terms.append(0.5 * penalty * penetration**2 * self.model.dx)
 
     def winding_contact(
-        self, axis_point, axis, reference, obstacle, penalty: float, smoothing: float = 0.0
+        self,
+        axis_point,
+        axis,
+        reference,
+        obstacle,
+        penalty: float,
+        smoothing: float = 0.0,
+        half_width=None,
     ) -> dolfinx.fem.Function:
         """Keep the beam's line out of a cylinder about the axis through ``axis_point`` along
         ``axis`` whose radius depends on how far each point has been wound round it:
@@ -143,6 +150,13 @@ class BeamProblem:
         length, k = ``penalty`` [N/m^2], the bracket smoothed over ``smoothing`` [m] as the
         shell's (:func:`~tapecoil.core.smoothing.penetration_ufl`). Turns resting on turns (a
         spiral obstacle, as the shell's ``contact.turns = "spiral"``).
+
+        With ``half_width(x)`` [m] (numpy, of the cells' midpoints' reference coordinate along
+        the tape), a flat section of that half width rests on the obstacle instead of its line:
+        the energy is taken across the section, along its axis 2, by Simpson's rule (its edges
+        a sixth each, the line two thirds), as the shell's contact is taken across the strip. A
+        line alone does not feel its section turn about it; a flat strip whose edges dig into
+        the turn beneath does (where the half width is 0 the line's energy is as above).
 
         psi, the winding angle [rad], is the load parameter (the hub angle of a clamp turning
         about this axis) less the node's swept angle, measured about the axis in its right-hand
@@ -197,11 +211,27 @@ class BeamProblem:
         self._winding.append(update)
         self._winding_angles.append((psi, nodes, update))
         self._predictors.append(predict)
-        d = ufl.SpatialCoordinate(self.mesh) + self.model.u - ufl.as_vector(centre.tolist())
+        line = ufl.SpatialCoordinate(self.mesh) + self.model.u - ufl.as_vector(centre.tolist())
         av = ufl.as_vector(a.tolist())
-        radial = d - ufl.dot(d, av) * av
-        penetration = penetration_ufl(obstacle(psi) - ufl.sqrt(ufl.dot(radial, radial)), smoothing)
-        self.energy_terms.append(0.5 * penalty * penetration**2 * self.model.dx)
+
+        def penetration(point):
+            radial = point - ufl.dot(point, av) * av
+            return penetration_ufl(obstacle(psi) - ufl.sqrt(ufl.dot(radial, radial)), smoothing)
+
+        if half_width is None:
+            density = penetration(line) ** 2
+        else:
+            widths = dolfinx.fem.Function(dolfinx.fem.functionspace(self.mesh, ("DG", 0)), name="half_width")
+            cells = np.arange(self.mesh.topology.index_map(1).size_local, dtype=np.int32)
+            middle = dolfinx.mesh.compute_midpoints(self.mesh, 1, cells)[:, 0]
+            dofs = np.asarray(widths.function_space.dofmap.list)[cells].reshape(-1)
+            widths.x.array[dofs] = np.asarray(half_width(middle), dtype=float)
+            widths.x.scatter_forward()
+            across = widths * ufl.as_vector([self.model.frame[i, 1] for i in range(3)])
+            density = (
+                penetration(line - across) ** 2 + 4 * penetration(line) ** 2 + penetration(line + across) ** 2
+            ) / 6
+        self.energy_terms.append(0.5 * penalty * density * self.model.dx)
         return psi
 
     def add_predictor(self, predict) -> None:

@@ -209,6 +209,10 @@ class HybridCoiling:
                 lambda psi: spiral_obstacle(psi, frame.radius, tp.h, c.max_turns, c.ramp_width) + tp.h / 2,
                 c.penalty * tp.b,
                 c.smoothing,
+                # the flattened strip rests across its width, as the shell's does: a line
+                # alone lets the coil's section twist, and the sections that a window move
+                # places from it dig their edges into the turn beneath (docs/hybrid.md)
+                half_width=lambda x: np.where(x < start, tp.b / 2, 0.0),
             )
             ties.append(("xi1_min", (start, 0.0, self.centroid), "flat"))
         if end < tp.L:

@@ -20,9 +20,11 @@ steps sized by their local error (the shell's and the beam's displacements toget
 full shell's :meth:`~tapecoil.phases.deployment.DeploymentModel.step_error`).
 
 As the tape unwinds the lift-off point travels towards the root. Once the release is over and
-the lift-off has come ``window_move`` closer to the window's start less ``window_behind``, the
-window moves back along the tape: a new hybrid is built whose window, of its own length,
-starts ``window_behind`` behind the lift-off, and the state and the rates (velocities and
+the lift-off has come within ``window_behind`` of the window's start, the window moves back
+along the tape: a new hybrid is built whose window, of its own length, starts ``window_behind +
+window_move`` behind the lift-off (so that the shell always holds at least ``window_behind`` of
+the coil behind the lift-off, and at least ``window_ahead - window_move`` of tape beyond it, as
+in coiling, where the lift-off travels the other way), and the state and the rates (velocities and
 accelerations) are carried over by :func:`~tapecoil.models.window.carry_motion`; shell becomes
 beam ahead of the ploy region, towards the free end, and beam becomes shell on the coil. The
 sections placed into shell from the flattened beam are then settled (:func:`settle_placed`).
@@ -31,13 +33,13 @@ The deployed fraction is the full shell's measure (:func:`~tapecoil.measures.dep
 read on the hybrid's centre line: the beam's line and the window's middle line, their inner face
 half a thickness inside them.
 
-The hybrid holds the tape behind the window flat on its turns. Where the coil loosens within
-``window_behind + window_move`` behind the window's start, the stretch that the next moves
-place into shell (the flattened beam, beyond its first turn, lifted off the turn beneath by
-more than the lift-off gap, as it does on the 2 m benchmark tape a third of a second after
-release), the run stops
-(:class:`CoilLoosening`) with its last converged state rather than place shell sections from
-the twisted, lifted beam.
+The hybrid holds the tape behind the window flat on its turns (the flattened beam rests on
+them across its width: a line alone let its section turn, and the 2 m benchmark tape's coil
+came loose a third of a second after release). Where the coil loosens within ``window_behind +
+window_move`` behind the window's start, the stretch that the next moves place into shell (the
+flattened beam, beyond its first turn, lifted off the turn beneath by more than the lift-off
+gap), the run stops (:class:`CoilLoosening`) with its last converged state rather than place
+shell sections from a lifted beam.
 """
 
 from __future__ import annotations
@@ -328,15 +330,17 @@ class HybridDeployment:
         )
 
     def _wanted_start(self, lift: float) -> float | None:
-        """The window's new start [m] for the lift-off at ``lift`` [m], None to stay."""
+        """The window's new start [m] for the lift-off at ``lift`` [m], None to stay: once the
+        lift-off has come within ``behind`` of the start, ``behind + move`` behind it (on the
+        elements' grid), so that, as in coiling, at least ``behind`` of the coil is always shell."""
         c = self.coiling
         start, _ = self.window()
         if start <= 0.0 or self.time < self.config.deployment.release_time:
             return None
-        wanted = c.element * math.floor((lift - c.window.behind) / c.element + 1e-9)
-        if wanted > start - c.move + 1e-9 * self.config.tape.L:
+        if lift - start >= c.window.behind - 1e-9 * self.config.tape.L:
             return None
-        return max(wanted, 0.0)
+        wanted = c.element * math.floor((lift - c.window.behind - c.move) / c.element + 1e-9)
+        return max(min(wanted, start - c.element), 0.0)
 
     def _move(self, start: float) -> None:
         old, motion = self.hybrid, self.motion
