@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from tapecoil.config import Config
+from tapecoil.config import Config, ConfigError, config_from_dict
 from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings
 from tapecoil.phases.hybrid_line import winding_along
 from tapecoil.verification import not_applicable
@@ -159,3 +159,14 @@ def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path)
     assert resumed["deployment"]["run"]["steps"] == deployment["run"]["steps"]
     assert resumed["deployment"]["measures"]["lambda0"] == deployment["measures"]["lambda0"]
     assert json.loads((out / "summary.json").read_text())["coiling"]["run"]["model"] == "hybrid"
+
+
+def test_the_beam_contact_key_reaches_the_window_settings():
+    """[model] beam_contact reaches the coiling's window settings, which the hybrid's beam reads
+    when it is built (the contact across the width: tests/test_beam.py), and a value that is
+    neither "line" nor "width" is refused."""
+    config = config_from_dict({"model": {"kind": "hybrid", "beam_contact": "width"}})
+    assert WindowSettings.from_config(config.model).beam_contact == "width"
+    assert WindowSettings.from_config(Config().model).beam_contact == "line"
+    with pytest.raises(ConfigError, match="beam_contact"):
+        config_from_dict({"model": {"kind": "hybrid", "beam_contact": "edges"}})

@@ -17,7 +17,7 @@ with the plate energy (physics.md Sec. 6), and the coiling's and the deployment'
 
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/hybrid_length_study.py 1.0
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/hybrid_length_study.py 2.0 \
-        --deploy --lambda-end 0.9 --hybrid-only --json deploy_L2.0.json
+        --deploy --lambda-end 0.9 --hybrid-only --beam-contact width --json deploy_L2.0.json
 """
 
 import argparse
@@ -48,6 +48,12 @@ parser.add_argument(
 parser.add_argument(
     "--hybrid-only", action="store_true", help="with --deploy: leave the full shell's deployment out"
 )
+parser.add_argument(
+    "--beam-contact",
+    choices=("line", "width"),
+    default="line",
+    help="model.beam_contact: the flattened beam on the turns by its line or across its width",
+)
 args = parser.parse_args()
 if not args.length > 2 * FREE:
     raise SystemExit(f"the tape must be longer than {2 * FREE} m, got {args.length}")
@@ -70,6 +76,11 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
         config, deployment=dataclasses.replace(config.deployment, t_end=t_end, lambda_end=lambda_end)
     )
     config.check()
+    # the hybrid's own setting, taken after the check (which refuses it on the full shell's
+    # model.kind, the configuration's here)
+    config = dataclasses.replace(
+        config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact)
+    )
     both = deploy_side_by_side(config, mesh, angle, full_shell=full_shell)
     tp = config.tape
     plate = theory.stored_energy(
@@ -112,6 +123,7 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
     print(f"coiling + deployment wall [s]       {hybrid['coiling_wall_time'] + hybrid['wall_time']:.1f}")
     if args.json:
         record = {"length": tp.L, "hub_angle": angle, "mesh": mesh, "ranks": ranks}
+        record["beam_contact"] = args.beam_contact
         with open(args.json, "w") as f:
             json.dump({**record, "lambda_end": lambda_end, **reference, **rows}, f, indent=1)
 
@@ -119,6 +131,7 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
 if args.deploy:
     deploy(config, args.mesh, angle, args.lambda_end, not args.hybrid_only)
     raise SystemExit(0)
+config = dataclasses.replace(config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact))
 both = coil_side_by_side(config, args.mesh, angle)
 if MPI.COMM_WORLD.rank == 0:
     print(

@@ -65,17 +65,21 @@ class WindowSettings:
         move: how far the lift-off travels before the window moves with it [m] (rounded up to
             whole elements).
         tie_penalty: the ties' penalty factor (:class:`~tapecoil.models.interface.RigidSectionTie`).
+        beam_contact: the flattened beam on the turns by its "line" or across its "width".
     """
 
     ahead: float = 0.15
     behind: float = 0.025
     move: float = 0.025
     tie_penalty: float = 1e2
+    beam_contact: str = "line"
 
     @classmethod
     def from_config(cls, model) -> WindowSettings:
         """From a :class:`~tapecoil.config.ModelConfig` (the [model] table)."""
-        return cls(model.window_ahead, model.window_behind, model.window_move, model.tie_penalty)
+        return cls(
+            model.window_ahead, model.window_behind, model.window_move, model.tie_penalty, model.beam_contact
+        )
 
 
 @dataclass
@@ -209,10 +213,14 @@ class HybridCoiling:
                 lambda psi: spiral_obstacle(psi, frame.radius, tp.h, c.max_turns, c.ramp_width) + tp.h / 2,
                 c.penalty * tp.b,
                 c.smoothing,
-                # the flattened strip rests across its width, as the shell's does: a line
+                # across its width, the flattened strip rests as the shell's does: a line
                 # alone lets the coil's section twist, and the sections that a window move
                 # places from it dig their edges into the turn beneath (docs/hybrid.md)
-                half_width=lambda x: np.where(x < start, tp.b / 2, 0.0),
+                half_width=(
+                    (lambda x: np.where(x < start, tp.b / 2, 0.0))
+                    if self.window.beam_contact == "width"
+                    else None
+                ),
             )
             ties.append(("xi1_min", (start, 0.0, self.centroid), "flat"))
         if end < tp.L:
