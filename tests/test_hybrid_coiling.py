@@ -165,8 +165,8 @@ def test_the_beam_contact_key_reaches_the_window_settings():
     """[model] beam_contact reaches the coiling's window settings, which the hybrid's beam reads
     when it is built (the contact across the width: tests/test_beam.py), and a value that is
     neither "line" nor "width" is refused."""
-    config = config_from_dict({"model": {"kind": "hybrid", "beam_contact": "width"}})
-    assert WindowSettings.from_config(config.model).beam_contact == "width"
-    assert WindowSettings.from_config(Config().model).beam_contact == "line"
+    config = config_from_dict({"model": {"kind": "hybrid", "beam_contact": "line"}})
+    assert WindowSettings.from_config(config.model).beam_contact == "line"
+    assert WindowSettings.from_config(Config().model).beam_contact == "width"
     with pytest.raises(ConfigError, match="beam_contact"):
         config_from_dict({"model": {"kind": "hybrid", "beam_contact": "edges"}})

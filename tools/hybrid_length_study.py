@@ -51,8 +51,13 @@ parser.add_argument(
 parser.add_argument(
     "--beam-contact",
     choices=("line", "width"),
-    default="line",
-    help="model.beam_contact: the flattened beam on the turns by its line or across its width",
+    help="model.beam_contact: the flattened beam on the turns by its line or across its width "
+    "(default the configuration's, width)",
+)
+parser.add_argument(
+    "--max-dt",
+    type=float,
+    help="with --deploy: deployment.max_dt [s], the steps' bound (default the configuration's, 1 ms)",
 )
 args = parser.parse_args()
 if not args.length > 2 * FREE:
@@ -75,12 +80,17 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
     config = dataclasses.replace(
         config, deployment=dataclasses.replace(config.deployment, t_end=t_end, lambda_end=lambda_end)
     )
+    if args.max_dt is not None:
+        config = dataclasses.replace(
+            config, deployment=dataclasses.replace(config.deployment, max_dt=args.max_dt)
+        )
     config.check()
     # the hybrid's own setting, taken after the check (which refuses it on the full shell's
     # model.kind, the configuration's here)
-    config = dataclasses.replace(
-        config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact)
-    )
+    if args.beam_contact is not None:
+        config = dataclasses.replace(
+            config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact)
+        )
     both = deploy_side_by_side(config, mesh, angle, full_shell=full_shell)
     tp = config.tape
     plate = theory.stored_energy(
@@ -123,7 +133,8 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
     print(f"coiling + deployment wall [s]       {hybrid['coiling_wall_time'] + hybrid['wall_time']:.1f}")
     if args.json:
         record = {"length": tp.L, "hub_angle": angle, "mesh": mesh, "ranks": ranks}
-        record["beam_contact"] = args.beam_contact
+        record["beam_contact"] = config.model.beam_contact
+        record["max_dt"] = config.deployment.max_dt
         with open(args.json, "w") as f:
             json.dump({**record, "lambda_end": lambda_end, **reference, **rows}, f, indent=1)
 
@@ -131,7 +142,10 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
 if args.deploy:
     deploy(config, args.mesh, angle, args.lambda_end, not args.hybrid_only)
     raise SystemExit(0)
-config = dataclasses.replace(config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact))
+if args.beam_contact is not None:
+    config = dataclasses.replace(
+        config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact)
+    )
 both = coil_side_by_side(config, args.mesh, angle)
 if MPI.COMM_WORLD.rank == 0:
     print(

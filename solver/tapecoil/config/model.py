@@ -28,12 +28,11 @@ class ModelConfig:
         window_move: how far the lift-off travels before the window moves with it [m].
         tie_penalty: the penalty factor of the ties between shell and beams [-] (times the
             stiffness of one shell element).
-        beam_contact: how the flattened beam rests on the turns: 'line' (its centre line) or
-            'width' (across its flat section, as the shell: its edges and line by Simpson's
-            rule). With 'line' its section can turn about the line unresisted; the 2 m tape's
-            coil then came loose a third of a second into its deployment, and with 'width'
-            it deploys. With 'width' the 0.5 m benchmark's run on the default mesh stops in
-            its release (docs/hybrid.md, "The flattened coil's twist").
+        beam_contact: how the flattened beam rests on the turns: 'width' (across its flat
+            section, as the shell: its edges and line by Simpson's rule) or 'line' (its
+            centre line alone, which lets the section turn about it unresisted: the 2 m
+            tape's coil then came loose a third of a second into its deployment;
+            docs/hybrid.md, "The flattened coil's twist").
     """
 
     kind: str = param("shell", "", ("shell", "hybrid"))
@@ -41,7 +40,7 @@ class ModelConfig:
     window_behind: float = param(0.025, "m", POSITIVE)
     window_move: float = param(0.025, "m", POSITIVE)
     tie_penalty: float = param(1e2, "-", POSITIVE)
-    beam_contact: str = param("line", "", ("line", "width"))
+    beam_contact: str = param("width", "", ("line", "width"))
 
 
 def check_model(config) -> None:

@@ -72,7 +72,7 @@ class WindowSettings:
     behind: float = 0.025
     move: float = 0.025
     tie_penalty: float = 1e2
-    beam_contact: str = "line"
+    beam_contact: str = "width"
 
     @classmethod
     def from_config(cls, model) -> WindowSettings:

@@ -33,8 +33,8 @@ The deployed fraction is the full shell's measure (:func:`~tapecoil.measures.dep
 read on the hybrid's centre line: the beam's line and the window's middle line, their inner face
 half a thickness inside them.
 
-The hybrid holds the tape behind the window flat on its turns (with ``model.beam_contact =
-"width"`` the flattened beam rests on them across its width: by its line alone its section
+The hybrid holds the tape behind the window flat on its turns (by default, ``model.beam_contact
+= "width"``, the flattened beam rests on them across its width: by its line alone its section
 turns, and the 2 m benchmark tape's coil came loose a third of a second after release).
 Where the coil loosens within ``window_behind + window_move`` behind the window's start, the
 stretch that the next moves place into shell (the flattened beam, beyond its first turn,
