@@ -72,6 +72,15 @@ config = dataclasses.replace(
 )
 
 
+def with_beam_contact(config):
+    """``config`` with --beam-contact's model.beam_contact, if given."""
+    if args.beam_contact is None:
+        return config
+    return dataclasses.replace(
+        config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact)
+    )
+
+
 def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool) -> None:
     """Coil with the hybrid and deploy with it (and the full shell); print, and write --json."""
     lam0 = 1.0 - theory.coiled_length_from_rotation(angle, config.hub.radius, config.tape.h) / config.tape.L
@@ -87,10 +96,7 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
     config.check()
     # the hybrid's own setting, taken after the check (which refuses it on the full shell's
     # model.kind, the configuration's here)
-    if args.beam_contact is not None:
-        config = dataclasses.replace(
-            config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact)
-        )
+    config = with_beam_contact(config)
     both = deploy_side_by_side(config, mesh, angle, full_shell=full_shell)
     tp = config.tape
     plate = theory.stored_energy(
@@ -142,10 +148,7 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
 if args.deploy:
     deploy(config, args.mesh, angle, args.lambda_end, not args.hybrid_only)
     raise SystemExit(0)
-if args.beam_contact is not None:
-    config = dataclasses.replace(
-        config, model=dataclasses.replace(config.model, beam_contact=args.beam_contact)
-    )
+config = with_beam_contact(config)
 both = coil_side_by_side(config, args.mesh, angle)
 if MPI.COMM_WORLD.rank == 0:
     print(
