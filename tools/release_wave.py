@@ -1,10 +1,10 @@
 """The release's wave down the coil, hybrid beside full shell: the benchmark tape (default mesh)
 coiled to 36 rad by the hybrid and let go, by the hybrid (its window as the coiling left it) and,
 from the hybrid's coil settled in it, by the full shell, to t = T_END [s] (argument, default
-0.011). At stations along the coil the inner face's largest gap to the turn beneath, across
-the strip (the shell's contact nodes; read from the geometry, not from the contact's energy),
-is followed step by step; printed: each station's peak gap [h] and when it came [ms], for
-both models (docs/hybrid.md, "The release's wave and the window's length").
+0.011). At stations along the coil the inner face's largest gap across the strip to the
+spiral of turns beneath (the shell contact's nodal penetration, negated: the same measure in
+both models) is followed step by step; printed: each station's peak gap [h] and when it came
+[ms], for both models (docs/hybrid.md, "The release's wave and the window's length").
 
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/release_wave.py
 """
@@ -47,11 +47,9 @@ stations = np.asarray(args.stations)
 def gaps(shell) -> np.ndarray:
     """The largest gap of the inner face to its obstacle across the strip at each station [m]
     (NaN where the shell has no node; collective)."""
-    contact, nodes = shell.contact, shell.contact.nodes
+    nodes = shell.contact.nodes
     owned = nodes.space.dofmap.index_map.size_local
-    q = shell.model.q.x.array
-    face = nodes.positions(q) + contact.face_offset * nodes.directors(q)
-    gap = (contact.polar(face)[0] - contact.spiral_radius(contact.psi.x.array))[:owned]
+    gap = -shell.contact.nodal_penetration()[:owned]
     s = nodes.xi[0, :owned]
     local = np.full(len(stations), -np.inf)
     for k, station in enumerate(stations):
