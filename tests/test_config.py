@@ -104,6 +104,11 @@ def test_integer_accepted_for_float(tmp_path):
             r"model\.window_move = 0\.0 .* must be > 0 \[m\]",
         ),
         (
+            {"model": {"kind": "hybrid", "window_release": -0.1}},
+            r"model\.window_release = -0\.1 .* must be > 0 \[m\]",
+        ),
+        ({"model": {"window_release": 0.2}}, r"model\.window_release acts only on the hybrid model"),
+        (
             {"model": {"kind": "hybrid"}, "coiling": {"sense": "equal"}},
             r"model\.kind = 'hybrid' needs coiling\.sense = 'opposite'",
         ),

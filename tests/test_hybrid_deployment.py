@@ -136,11 +136,18 @@ def test_the_hybrid_deploys_the_benchmark_as_the_full_shell_does():
     assert len(result.info["moves"]) > 3  # the window went down the coil
 
 
-def short_deployment(comm, t_end=0.02, run=True, angle=4.5):
+def short_deployment(comm, t_end=0.02, run=True, angle=4.5, window_release=0.025):
+    """The coarse tape coiled to ``angle`` by the hybrid and deployed to ``t_end``; by default
+    its window at release the coiling's own (which holds at least window_behind = 0.025 m of
+    coil behind the lift-off)."""
     from tapecoil.phases.hybrid_deployment import HybridDeployment
 
     config = coarse(angle)
-    config = dataclasses.replace(config, deployment=dataclasses.replace(config.deployment, t_end=t_end))
+    config = dataclasses.replace(
+        config,
+        deployment=dataclasses.replace(config.deployment, t_end=t_end),
+        model=dataclasses.replace(config.model, window_release=window_release),
+    )
     coiling = HybridCoiling(config, comm=comm)
     coiling.flatten()
     coiling.coil(angle)
@@ -180,6 +187,29 @@ def test_the_hybrid_stops_where_the_coil_loosens_behind_its_window():
     assert deployment.time < 1e-3  # in the release's first steps (the second, measured)
     gap, at = deployment.beam_gap
     assert 2.0 * h < gap < 5.0 * h and 0.8 * start <= at < start
+
+
+def test_the_release_window_holds_the_coil_its_wave_lifts():
+    """The coarse 12 rad coil let go with ``window_release`` = 0.1 m: the window at release
+    reaches back that far behind the lift-off, on the elements' grid (a consistency check of
+    the rule), where the coiling's window held 0.025 to 0.05 m; the sections placed there from
+    the flattened beam are settled on the coil by a converged solve that moves them by less
+    than a thickness, and the release steps on from that state, the beam behind resting on its
+    turn."""
+    deployment = short_deployment(MPI.COMM_WORLD, t_end=0.002, run=False, angle=12.0, window_release=0.1)
+    coiling, h = deployment.coiling, deployment.config.tape.h
+    lift = deployment.lift_off()["coiled_length"]
+    start = deployment.window()[0]
+    assert start / coiling.element == pytest.approx(round(start / coiling.element), abs=1e-9)
+    assert abs(start - (lift - 0.1)) <= coiling.element * (1 + 1e-9)
+    assert deployment.window()[1] == pytest.approx(deployment.config.tape.L)
+    (settled,) = deployment.placed_settling
+    # the shell's quadratic interpolation between sections placed exactly at its nodes, on
+    # coarse elements that span about a radian of the hub (measured 0.68 h)
+    assert settled["converged"] and 0 < settled["iterations"] and settled["moved"] < h
+    assert deployment.run() == "t_end"
+    assert deployment.time == pytest.approx(0.002)
+    assert deployment.lift_off()["beam_gap"] < h
 
 
 @pytest.mark.mpi

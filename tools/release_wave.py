@@ -1,7 +1,8 @@
 """The release's wave down the coil, hybrid beside full shell: the benchmark tape (default mesh)
-coiled to 36 rad by the hybrid and let go, by the hybrid (its window as the coiling left it) and,
-from the hybrid's coil settled in it, by the full shell, to t = T_END [s] (argument, default
-0.011). At stations along the coil the inner face's largest gap across the strip to the
+coiled to 36 rad by the hybrid and let go, by the hybrid (its window at release holding
+``--window-release`` [m] of coil behind the lift-off, by default the configuration's
+model.window_release) and, from the hybrid's coil settled in it, by the full shell, to t = T_END
+[s] (argument, default 0.011). At stations along the coil the inner face's largest gap across the strip to the
 spiral of turns beneath (the shell contact's nodal penetration, negated: the same measure in
 both models) is followed step by step; printed: each station's peak gap [h] and when it came
 [ms], for both models (docs/hybrid.md, "The release's wave and the window's length").
@@ -32,6 +33,12 @@ parser.add_argument(
     default=[0.32, 0.34, 0.36, 0.38, 0.40, 0.42, 0.44],
     help="material coordinates along the tape [m] (on the shell's nodes)",
 )
+parser.add_argument(
+    "--window-release",
+    type=float,
+    help="model.window_release [m]: the coil the hybrid's window holds behind the lift-off at "
+    "release (0.025 keeps the coiling's window)",
+)
 args = parser.parse_args()
 comm = MPI.COMM_WORLD
 config = load_config()
@@ -40,6 +47,10 @@ config = dataclasses.replace(
     mesh=dataclasses.replace(config.mesh, preset="default"),
     deployment=dataclasses.replace(config.deployment, t_end=args.t_end),
 )
+if args.window_release is not None:
+    config = dataclasses.replace(
+        config, model=dataclasses.replace(config.model, window_release=args.window_release)
+    )
 h = config.tape.h
 stations = np.asarray(args.stations)
 
@@ -70,6 +81,8 @@ coiling = HybridCoiling(config, comm)
 coiling.flatten()
 coiling.coil(config.coiling.hub_angle)
 hybrid = HybridDeployment(coiling)
+if comm.rank == 0:
+    print(f"the hybrid's window at release: {hybrid.window()[0]:.4f} to {hybrid.window()[1]:.4f} m")
 sides = {"hybrid": ([], []), "full shell": ([], [])}
 follow(*sides["hybrid"], 0.0, hybrid.hybrid.shell)
 hybrid.run(lambda record: follow(*sides["hybrid"], record.time, hybrid.hybrid.shell))

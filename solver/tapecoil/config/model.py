@@ -26,6 +26,13 @@ class ModelConfig:
             margin).
         window_behind: the hybrid's shell on the coil behind the lift-off point [m].
         window_move: how far the lift-off travels before the window moves with it [m].
+        window_release: the coil the hybrid's window holds behind the lift-off when the tape is
+            let go [m] (at least: more if the coiling's window held more; a coil shorter than
+            this keeps the coiling's window). The release sends a wave of lift down the coil,
+            on the benchmark above two thicknesses to about 0.1 m behind the lift-off with the
+            default steps, which the flattened beam cannot follow (docs/hybrid.md, "The
+            release's wave and the window's length"). The window takes its own length again at
+            its first move.
         tie_penalty: the penalty factor of the ties between shell and beams [-] (times the
             stiffness of one shell element).
         beam_contact: how the flattened beam rests on the turns: 'width' (across its flat
@@ -39,6 +46,7 @@ class ModelConfig:
     window_ahead: float = param(0.15, "m", POSITIVE)
     window_behind: float = param(0.025, "m", POSITIVE)
     window_move: float = param(0.025, "m", POSITIVE)
+    window_release: float = param(0.15, "m", POSITIVE)
     tie_penalty: float = param(1e2, "-", POSITIVE)
     beam_contact: str = param("width", "", ("line", "width"))
 

@@ -66,6 +66,8 @@ class WindowSettings:
             whole elements).
         tie_penalty: the ties' penalty factor (:class:`~tapecoil.models.interface.RigidSectionTie`).
         beam_contact: the flattened beam on the turns by its "line" or across its "width".
+        release: the coil the window holds behind the lift-off at the release [m] (the
+            deployment's).
     """
 
     ahead: float = 0.15
@@ -73,12 +75,18 @@ class WindowSettings:
     move: float = 0.025
     tie_penalty: float = 1e2
     beam_contact: str = "width"
+    release: float = 0.15
 
     @classmethod
     def from_config(cls, model) -> WindowSettings:
         """From a :class:`~tapecoil.config.ModelConfig` (the [model] table)."""
         return cls(
-            model.window_ahead, model.window_behind, model.window_move, model.tie_penalty, model.beam_contact
+            model.window_ahead,
+            model.window_behind,
+            model.window_move,
+            model.tie_penalty,
+            model.beam_contact,
+            model.window_release,
         )
 
 

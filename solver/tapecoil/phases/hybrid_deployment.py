@@ -3,8 +3,11 @@ window follows the ploy region down the coil as the tape unwinds.
 
 The start is a :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling` at its final hub angle,
 in equilibrium with the guide and the pull at the free end. At release the window is rebuilt
-from where it starts to the free end (it is there already when the coil leaves less than
-``window_ahead`` free) with the free end let go, the state carried over
+to the free end (it is there already when the coil leaves less than ``window_ahead`` free),
+from where it starts or, if that holds less, from ``window_release`` of coil behind the
+lift-off (a coil shorter than that keeps the coiling's window): the release sends a wave of lift
+down the coil, which the flattened beam behind the window cannot follow. The free end is let
+go, the state carried over
 (:func:`~tapecoil.models.window.carry_over`), and the end is held by the full shell's release
 hold (:class:`~tapecoil.phases.release.EndHold`: a spring to the stowed end and the dead
 forces that held it there, let go over ``deployment.release_time``). The hub is held at its
@@ -203,15 +206,24 @@ class HybridDeployment:
         # the flattened beam's largest gap to its turn behind the window [m] and where [m]
         self.beam_gap = (0.0, 0.0)
         self.records: list[DeploymentRecord] = []
-        # each move's settling of the sections placed from the beam (settle_placed's figures)
+        # the release's and each move's settling of the sections placed from the beam
+        # (settle_placed's figures)
         self.placed_settling: list[dict] = []
         self.moves: list[tuple[float, float, float]] = []
         old = coiling.hybrid
-        start = old.shell.surface.xi_range[0][0]
-        # the window reaches the free end, whose hold the release lets go
+        # the window reaches the free end, whose hold the release lets go, and holds at least
+        # window_release of the coil behind the lift-off, where the release's wave runs; a
+        # coil shorter than that keeps the coiling's window, and its flattened beam at the root
+        lift = self._coiled(old)[-1]
+        element = coiling.element
+        wanted = element * math.floor((lift - coiling.window.release) / element + 1e-9)
+        old_start = old.shell.surface.xi_range[0][0]
+        start = min(old_start, wanted) if wanted > 0 else old_start
         self.hybrid = coiling.build(start, self._name(), released=True, end=tp.L)
         carry_over(old, self.hybrid)
         coiling.carry_winding(old, self.hybrid)
+        if start < old_start:  # the coil at rest: its placed sections settle as in a move
+            self.placed_settling.append(settle_placed(self.hybrid, (old_start, tp.L), cfg))
         self.hold = None
         self.motion = self._motion(self.hybrid, release=True)
         self.moves.append((0.0, *self.window()))
@@ -287,11 +299,7 @@ class HybridDeployment:
         (:func:`~tapecoil.measures.deployment.coiled_length`) on the hybrid's centre line, the
         inner face half a thickness inside it (collective)."""
         tp = self.config.tape
-        x, points = centre_line(self.hybrid)
-        psi = winding_along(self.coiling.frame, self.angle, points)
-        obstacle = self.hybrid.shell.contact.spiral_radius(psi)
-        gap = self.coiling.frame.polar(points.T)[0] - 0.5 * tp.h - obstacle
-        coiled = coiled_length(x, gap, obstacle, LIFT_OFF_GAP * tp.h)
+        x, psi, gap, coiled = self._coiled(self.hybrid)
         # the stretch of beam that the next moves place into shell, where it rests on a turn
         # (on the hub, by the root, the release lifts it by 2 to 2.5 h: docs/hybrid.md)
         start, reach = self.window()[0], self.coiling.window.behind + self.coiling.move
@@ -304,6 +312,16 @@ class HybridDeployment:
             "beam_gap": float(gap[loosest]) if loosest is not None else 0.0,
             "beam_gap_at": float(x[loosest]) if loosest is not None else 0.0,
         }
+
+    def _coiled(self, hybrid) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """Along ``hybrid``'s centre line: the places [m], the winding angles [rad], the inner
+        face's gaps to the spiral of turns [m], and the coiled length [m] (collective)."""
+        tp = self.config.tape
+        x, points = centre_line(hybrid)
+        psi = winding_along(self.coiling.frame, self.angle, points)
+        obstacle = hybrid.shell.contact.spiral_radius(psi)
+        gap = self.coiling.frame.polar(points.T)[0] - 0.5 * tp.h - obstacle
+        return x, psi, gap, coiled_length(x, gap, obstacle, LIFT_OFF_GAP * tp.h)
 
     # -- stepping -------------------------------------------------------------------------------
     def step_error(self) -> float:
