@@ -5,7 +5,10 @@ model.window_release) and, from the hybrid's coil settled in it, by the full she
 [s] (argument, default 0.011). At stations along the coil the inner face's largest gap across the strip to the
 spiral of turns beneath (the shell contact's nodal penetration, negated: the same measure in
 both models) is followed step by step; printed: each station's peak gap [h] and when it came
-[ms], for both models (docs/hybrid.md, "The release's wave and the window's length").
+[ms], for both models, and the hybrid's reading behind its window (the flattened beam's largest gap to its
+turn, where it stops at 2 h: ``CoilLoosening``, which ends the hybrid's part and is printed)
+with where and when it was largest (docs/hybrid.md, "The release's wave and the window's
+length"). ``--error-tolerance`` and ``--max-dt`` set the deployment's steps.
 
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/release_wave.py
 """
@@ -22,7 +25,7 @@ from tapecoil.phases.deployment import DeploymentModel
 from tapecoil.phases.deployment_run import DeploymentRun
 from tapecoil.phases.hybrid_coiling import HybridCoiling
 from tapecoil.phases.hybrid_coiling_run import settle
-from tapecoil.phases.hybrid_deployment import HybridDeployment
+from tapecoil.phases.hybrid_deployment import CoilLoosening, HybridDeployment
 
 parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("t_end", nargs="?", type=float, default=0.011, help="simulated time [s]")
@@ -39,13 +42,20 @@ parser.add_argument(
     help="model.window_release [m]: the coil the hybrid's window holds behind the lift-off at "
     "release (0.025 keeps the coiling's window)",
 )
+parser.add_argument(
+    "--error-tolerance", type=float, default=0.0, help="deployment.error_tolerance (0: the default steps)"
+)
+parser.add_argument("--max-dt", type=float, help="deployment.max_dt and dt [s]")
 args = parser.parse_args()
 comm = MPI.COMM_WORLD
 config = load_config()
+steps = {"error_tolerance": args.error_tolerance}
+if args.max_dt is not None:
+    steps.update(max_dt=args.max_dt, dt=args.max_dt)
 config = dataclasses.replace(
     config,
     mesh=dataclasses.replace(config.mesh, preset="default"),
-    deployment=dataclasses.replace(config.deployment, t_end=args.t_end),
+    deployment=dataclasses.replace(config.deployment, t_end=args.t_end, **steps),
 )
 if args.window_release is not None:
     config = dataclasses.replace(
@@ -85,8 +95,28 @@ if comm.rank == 0:
     print(f"the hybrid's window at release: {hybrid.window()[0]:.4f} to {hybrid.window()[1]:.4f} m")
 sides = {"hybrid": ([], []), "full shell": ([], [])}
 follow(*sides["hybrid"], 0.0, hybrid.hybrid.shell)
-hybrid.run(lambda record: follow(*sides["hybrid"], record.time, hybrid.hybrid.shell))
+behind = (0.0, 0.0, 0.0)  # the beam's largest gap behind the window [m], where [m], when [s]
+
+
+def hybrid_step(record) -> None:
+    global behind
+    follow(*sides["hybrid"], record.time, hybrid.hybrid.shell)
+    gap, at = hybrid.beam_gap
+    if gap > behind[0]:
+        behind = (gap, at, record.time)
+
+
+try:
+    hybrid.run(hybrid_step)
+except CoilLoosening as stop:
+    if comm.rank == 0:
+        print(f"the hybrid stopped: {stop}")
 hybrid.destroy()
+if comm.rank == 0:
+    print(
+        f"the flattened beam behind the window: largest gap {behind[0] / h:.2f} h at s = "
+        f"{behind[1]:.3f} m, t = {1e3 * behind[2]:.2f} ms"
+    )
 
 model = CoilingModel(config, comm)
 coiling.carry_into(model)
