@@ -202,6 +202,7 @@ def test_the_release_window_holds_the_coil_its_wave_lifts():
     start = deployment.window()[0]
     assert start / coiling.element == pytest.approx(round(start / coiling.element), abs=1e-9)
     assert abs(start - (lift - 0.1)) <= coiling.element * (1 + 1e-9)
+    assert lift - start > coiling.window.behind + coiling.move  # more than the coiling's held
     assert deployment.window()[1] == pytest.approx(deployment.config.tape.L)
     (settled,) = deployment.placed_settling
     # the shell's quadratic interpolation between sections placed exactly at its nodes, on
@@ -210,6 +211,13 @@ def test_the_release_window_holds_the_coil_its_wave_lifts():
     assert deployment.run() == "t_end"
     assert deployment.time == pytest.approx(0.002)
     assert deployment.lift_off()["beam_gap"] < h
+
+
+@pytest.mark.mpi
+def test_the_release_window_on_two_ranks():
+    """As above on 2 ranks: the lift-off read on the gathered line, the settling collective."""
+    assert MPI.COMM_WORLD.size > 1
+    test_the_release_window_holds_the_coil_its_wave_lifts()
 
 
 @pytest.mark.mpi
