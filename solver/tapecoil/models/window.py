@@ -34,20 +34,27 @@ A section carried between beam and shell keeps its place and its turn. The shell
 deformation beyond the beam's shape is dropped where shell becomes beam, and the shell's own
 interpolation error of a turned arc is added where beam becomes shell: the energy is conserved
 where the section has the beam's shape (docs/hybrid.md gives the measured figures).
+
+:func:`settle_placed` then lets the sections placed from the beam find the shell's own
+equilibrium among their neighbours, where a motion in time would release that difference as a
+vibration.
 """
 
 from __future__ import annotations
 
 from types import SimpleNamespace
 
+import dolfinx
 import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
+from tapecoil.core.dofs import global_scalar
+from tapecoil.core.newton import SNESSolver
 from tapecoil.models.interface import section_shape
 from tapecoil.models.nodes import Nodes
 
-__all__ = ["carry_motion", "carry_over", "full_shell"]
+__all__ = ["carry_motion", "carry_over", "full_shell", "settle_placed"]
 
 # the curvature of a fitted frame field by a central difference over this share of an element
 DIFFERENCE_STEP = 1e-3
@@ -427,3 +434,65 @@ def carry_motion(old, new, old_rates, probe: float):
     new_beam_v[t_theta] = (turn_plus - turn_minus) / (2 * probe)
     new_beam_a[t_theta] = (turn_plus + turn_minus) / probe**2
     return new_shell_v, new_shell_a, new_beam_v, new_beam_a
+
+
+def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
+    """Settle the sections of ``hybrid``'s shell that a window move placed from the old beam
+    (those outside ``old_window`` (start, end) [m], but for the tie's edge): one static solve of
+    the shell's energy for their dofs, every other dof held where the carry-over put it.
+
+    A beam's section placed rigidly at the shell's nodes is not the shell's own equilibrium
+    there: the shell's quadratic interpolation between sections placed exactly at its nodes
+    strains it (on a coil, where an element spans a third of a radian of the hub on the default
+    mesh and a radian on the coarse one). In a static solve the next step removes it; in time it
+    would be released as a spurious vibration. Returns the strain energy [J] of the window before
+    and after, the largest displacement [m] and the Newton iterations (collective); on a failed
+    solve the placed state is kept and ``converged`` is False."""
+    shell = hybrid.shell
+    model = shell.model
+    nodes = Nodes(model)
+    (start, end), _ = shell.surface.xi_range
+    x = nodes.xi[0]
+    tol = 1e-9 * (1.0 + abs(end))
+    free = ((x < old_window[0] - tol) | (x > old_window[1] + tol)) & (x > start + tol) & (x < end - tol)
+    strain = dolfinx.fem.form(model.strain_energy)
+    before = global_scalar(strain, shell.comm)
+    if shell.comm.allreduce(int(free.sum())) == 0:
+        return {
+            "strain_energy_placed": before,
+            "strain_energy_settled": before,
+            "moved": 0.0,
+            "iterations": 0,
+            "converged": True,
+        }
+    free_dofs = np.concatenate([nodes.u_dofs[free].ravel(), nodes.theta_dofs[free].ravel()])
+    size = len(model.q.x.array)
+    held = np.setdiff1d(np.arange(size, dtype=np.int32), free_dofs).astype(np.int32)
+    placed = dolfinx.fem.Function(model.W)
+    placed.x.array[:] = model.q.x.array
+    hold = dolfinx.fem.dirichletbc(placed, held)
+    F, J = shell.forms()
+    solver = SNESSolver.from_config(
+        F,
+        J,
+        model.q,
+        [*shell.bcs, hold],
+        config.solver,
+        prefix=f"{shell.name}_placed_",
+        defaults={"pc_type": "cholesky"},
+        state_scale=model.rounding_scale(),
+    )
+    result = solver.solve()
+    if not result.converged:
+        model.q.x.array[:] = placed.x.array
+    model.q.x.scatter_forward()
+    solver.destroy()
+    change = model.q.x.array - placed.x.array
+    moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
+    return {
+        "strain_energy_placed": before,
+        "strain_energy_settled": global_scalar(strain, shell.comm),
+        "moved": shell.comm.allreduce(moved, op=MPI.MAX),
+        "iterations": int(result.iterations),
+        "converged": bool(result.converged),
+    }

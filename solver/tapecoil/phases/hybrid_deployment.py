@@ -30,7 +30,8 @@ the coil behind the lift-off, and at least ``window_ahead - window_move`` of tap
 in coiling, where the lift-off travels the other way), and the state and the rates (velocities and
 accelerations) are carried over by :func:`~tapecoil.models.window.carry_motion`; shell becomes
 beam ahead of the ploy region, towards the free end, and beam becomes shell on the coil. The
-sections placed into shell from the flattened beam are then settled (:func:`settle_placed`).
+sections placed into shell from the flattened beam are then settled
+(:func:`~tapecoil.models.window.settle_placed`).
 
 The deployed fraction is the full shell's measure (:func:`~tapecoil.measures.deployment.coiled_length`)
 read on the hybrid's centre line: the beam's line and the window's middle line, their inner face
@@ -60,12 +61,11 @@ from mpi4py import MPI
 from tapecoil.config.model import hybrid_need
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import global_scalar, global_size, owned_size
-from tapecoil.core.newton import SNESSolver
 from tapecoil.core.stepping import Continuation, ContinuationError
 from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.nodes import Nodes
-from tapecoil.models.window import carry_motion, carry_over
+from tapecoil.models.window import carry_motion, carry_over, settle_placed
 from tapecoil.phases.deployment_forms import director_rates
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.hybrid_motion import HybridMotion
@@ -100,68 +100,6 @@ class DeploymentRecord:
     cutbacks: int
     rejected_steps: int
     wall_time: float
-
-
-def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
-    """Settle the sections of ``hybrid``'s shell that a window move placed from the old beam
-    (those outside ``old_window`` (start, end) [m], but for the tie's edge): one static solve of
-    the shell's energy for their dofs, every other dof held where the carry-over put it.
-
-    A beam's section placed rigidly at the shell's nodes is not the shell's own equilibrium
-    there: the shell's quadratic interpolation between sections placed exactly at its nodes
-    strains it (on a coil, where an element spans a third of a radian of the hub on the default
-    mesh and a radian on the coarse one). In a static solve the next step removes it; in time it
-    would be released as a spurious vibration. Returns the strain energy [J] of the window before
-    and after, the largest displacement [m] and the Newton iterations (collective); on a failed
-    solve the placed state is kept and ``converged`` is False."""
-    shell = hybrid.shell
-    model = shell.model
-    nodes = Nodes(model)
-    (start, end), _ = shell.surface.xi_range
-    x = nodes.xi[0]
-    tol = 1e-9 * (1.0 + abs(end))
-    free = ((x < old_window[0] - tol) | (x > old_window[1] + tol)) & (x > start + tol) & (x < end - tol)
-    strain = dolfinx.fem.form(model.strain_energy)
-    before = global_scalar(strain, shell.comm)
-    if shell.comm.allreduce(int(free.sum())) == 0:
-        return {
-            "strain_energy_placed": before,
-            "strain_energy_settled": before,
-            "moved": 0.0,
-            "iterations": 0,
-            "converged": True,
-        }
-    free_dofs = np.concatenate([nodes.u_dofs[free].ravel(), nodes.theta_dofs[free].ravel()])
-    size = len(model.q.x.array)
-    held = np.setdiff1d(np.arange(size, dtype=np.int32), free_dofs).astype(np.int32)
-    placed = dolfinx.fem.Function(model.W)
-    placed.x.array[:] = model.q.x.array
-    hold = dolfinx.fem.dirichletbc(placed, held)
-    F, J = shell.forms()
-    solver = SNESSolver.from_config(
-        F,
-        J,
-        model.q,
-        [*shell.bcs, hold],
-        config.solver,
-        prefix=f"{shell.name}_placed_",
-        defaults={"pc_type": "cholesky"},
-        state_scale=model.rounding_scale(),
-    )
-    result = solver.solve()
-    if not result.converged:
-        model.q.x.array[:] = placed.x.array
-    model.q.x.scatter_forward()
-    solver.destroy()
-    change = model.q.x.array - placed.x.array
-    moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
-    return {
-        "strain_energy_placed": before,
-        "strain_energy_settled": global_scalar(strain, shell.comm),
-        "moved": shell.comm.allreduce(moved, op=MPI.MAX),
-        "iterations": int(result.iterations),
-        "converged": bool(result.converged),
-    }
 
 
 class CoilLoosening(ContinuationError):
