@@ -59,6 +59,18 @@ parser.add_argument(
     type=float,
     help="with --deploy: deployment.max_dt [s], the steps' bound (default the configuration's, 1 ms)",
 )
+parser.add_argument(
+    "--rho-inf",
+    type=float,
+    help="with --deploy: deployment.rho_inf, generalized-alpha's spectral radius (default the "
+    "configuration's, 0.5)",
+)
+parser.add_argument(
+    "--deploy-rtol",
+    type=float,
+    help="with --deploy: Newton's relative tolerance in the deployment alone (deployment.petsc_options "
+    "snes_rtol; default solver.rtol, 1e-8)",
+)
 args = parser.parse_args()
 if not args.length > 2 * FREE:
     raise SystemExit(f"the tape must be longer than {2 * FREE} m, got {args.length}")
@@ -89,10 +101,13 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
     config = dataclasses.replace(
         config, deployment=dataclasses.replace(config.deployment, t_end=t_end, lambda_end=lambda_end)
     )
-    if args.max_dt is not None:
-        config = dataclasses.replace(
-            config, deployment=dataclasses.replace(config.deployment, max_dt=args.max_dt)
-        )
+    settings = {
+        "max_dt": args.max_dt,
+        "rho_inf": args.rho_inf,
+        "petsc_options": None if args.deploy_rtol is None else {"snes_rtol": args.deploy_rtol},
+    }
+    settings = {key: value for key, value in settings.items() if value is not None}
+    config = dataclasses.replace(config, deployment=dataclasses.replace(config.deployment, **settings))
     config.check()
     # the hybrid's own setting, taken after the check (which refuses it on the full shell's
     # model.kind, the configuration's here)
@@ -141,6 +156,8 @@ def deploy(config, mesh: str, angle: float, lambda_end: float, full_shell: bool)
         record = {"length": tp.L, "hub_angle": angle, "mesh": mesh, "ranks": ranks}
         record["beam_contact"] = config.model.beam_contact
         record["max_dt"] = config.deployment.max_dt
+        record["rho_inf"] = config.deployment.rho_inf
+        record["deployment_petsc_options"] = config.deployment.petsc_options
         with open(args.json, "w") as f:
             json.dump({**record, "lambda_end": lambda_end, **reference, **rows}, f, indent=1)
 
