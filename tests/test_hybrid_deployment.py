@@ -252,11 +252,8 @@ def check_newton_matrix_is_the_residuals_derivative(comm):
         scheme.set_step(dt)
         scheme.predict(dt)
     deployment.hold.release(deployment.time + dt)
-    x0 = solver.x.copy()
-    for blk, iset in zip(solver.blocks, solver.index_sets, strict=True):
-        sub = x0.getSubVector(iset)
-        sub.array[:] = blk.q.x.petsc_vec.array_r
-        x0.restoreSubVector(iset, sub)
+    x0 = solver.x.duplicate()
+    solver._write_states(x0)  # the predicted states, as a solve starts from them
     solver.snes.computeJacobian(x0, solver.J)
     held = x0.duplicate()
     held.set(1.0)
