@@ -29,6 +29,7 @@ from petsc4py import PETSc
 
 from tapecoil.core import compat
 from tapecoil.core.convergence import ResidualTest
+from tapecoil.core.dofs import global_size, owned_constrained_dofs, owned_size
 from tapecoil.core.newton import SolveResult, assemble_residual, create_snes, run_snes
 from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix
 
@@ -49,10 +50,6 @@ class Block:
     state_scale: dolfinx.fem.Function | None = None
 
 
-def _owned_size(V) -> int:
-    return V.dofmap.index_map.size_local * V.dofmap.index_map_bs
-
-
 class DofCoupling:
     """An energy E(q0, c) on the first block's mesh whose parameters c (n values) are dofs of the
     second block's state q1.
@@ -67,7 +64,7 @@ class DofCoupling:
         V1 = q1.function_space
         comm = V1.mesh.comm
         owned = dofs >= 0
-        if np.any(dofs[owned] >= _owned_size(V1)):
+        if np.any(dofs[owned] >= owned_size(V1)):
             raise ValueError("coupling: a dof given as owned is a ghost on this rank")
         counts = comm.allreduce(owned.astype(int), op=MPI.SUM)
         if np.any(counts != 1):
@@ -267,11 +264,8 @@ class CoupledSNESSolver:
         # the rows of the first block that the coupling touches: the dofs of the cells its
         # integrals see; every Jacobian sets all of them, zeros too, so the pattern is fixed
         self._rows = self._coupled_rows()
-        n0, n1 = (_owned_size(blk.q.function_space) for blk in blocks)
-        N0, N1 = (
-            blk.q.function_space.dofmap.index_map.size_global * blk.q.function_space.dofmap.index_map_bs
-            for blk in blocks
-        )
+        n0, n1 = (owned_size(blk.q.function_space) for blk in blocks)
+        N0, N1 = (global_size(blk.q.function_space) for blk in blocks)
         c = len(coupling.dofs)
         self.C = PETSc.Mat().createAIJ(((n0, N0), (n1, N1)), nnz=(c, c), comm=comm)
         self.C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
@@ -320,9 +314,8 @@ class CoupledSNESSolver:
         dofs = np.unique(np.asarray(V0.dofmap.list)[cells].reshape(-1))
         bs = V0.dofmap.index_map_bs
         rows = (dofs[:, None] * bs + np.arange(bs)).reshape(-1)
-        rows = rows[rows < _owned_size(V0)]
-        constrained = [bc.dof_indices()[0] for bc in self.blocks[0].bcs]
-        return np.setdiff1d(rows, np.concatenate(constrained) if constrained else []).astype(PETSc.IntType)
+        rows = rows[rows < owned_size(V0)]
+        return np.setdiff1d(rows, owned_constrained_dofs(V0, self.blocks[0].bcs)).astype(PETSc.IntType)
 
     def _fill_coupling_block(self, values: np.ndarray) -> None:
         """C[rows, coupled dofs] = values (rows, n); rows are owned, local to the first block."""
