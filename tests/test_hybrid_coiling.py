@@ -34,6 +34,46 @@ def test_the_hybrid_coils_the_benchmark_as_the_full_shell_does():
     assert len(windows) == 2 and windows[1][1] > 0.0  # it left the root
 
 
+def test_the_hybrid_coil_lands_on_the_stops():
+    """Coiled to 1 rad with stops at 0.3 and 0.7 rad: converged steps end on both, to rounding."""
+    run = HybridCoiling(coarse(1.0))
+    run.flatten()
+    run.coil(1.0, stops=(0.3, 0.7))
+    angles = [r.hub_angle for r in run.records]
+    for stop in (0.3, 0.7, 1.0):
+        assert min(abs(a - stop) for a in angles) < 1e-12, (stop, angles)
+
+
+def test_the_tensions_compare_at_the_same_hub_angles():
+    """Two readings of one swinging tension, offset by 0.01 N: their means over each one's own
+    steps differ by more than the offset (here with the wrong sign); read also at common stops,
+    the paired comparison there gives the offset to rounding, with a zero standard error."""
+    from tapecoil.verification.hybrid_coil import _band_mean, paired_tension, tension_stops
+
+    stops = tension_stops(9.2, 0.5)
+    assert stops == pytest.approx([6.0, 6.5, 7.0, 7.5, 8.0, 8.5, 9.0, 9.2])
+
+    def swing(a):
+        return 0.4 + 0.1 * np.sin(7.3 * a)
+
+    full_steps, hybrid_steps = np.linspace(6.0, 9.2, 5), np.linspace(6.0, 9.2, 7)
+    own = _band_mean([(a, swing(a) - 0.01) for a in hybrid_steps], 6.0) - _band_mean(
+        [(a, swing(a)) for a in full_steps], 6.0
+    )
+    assert abs(own + 0.01) > 0.01
+    full = [(a, swing(a)) for a in sorted({*full_steps, *stops})]
+    hybrid = [(a, swing(a) - 0.01) for a in sorted({*hybrid_steps, *stops})]
+    paired = paired_tension(hybrid, full, stops)
+    assert paired["stops"] == len(stops)
+    assert paired["difference"] == pytest.approx(-0.01, abs=1e-14)
+    assert paired["standard_error"] == pytest.approx(0.0, abs=1e-14)
+    assert paired_tension(hybrid, full, ()) is None
+    with pytest.raises(RuntimeError, match=r"6\.25 rad"):
+        paired_tension(hybrid, full, (6.25,))
+    with pytest.raises(ValueError, match="positive"):
+        tension_stops(9.2, 0.0)
+
+
 def test_winding_angles_unwrap_along_the_tape_from_the_root():
     """Points wound 1.5 turns onto a hub and then straight on: their winding angles, read from
     their polar angles alone, climb from 0 at the root through 3 pi without a jump."""
@@ -60,7 +100,7 @@ def test_bad_hybrid_coilings_are_refused_before_anything_is_built():
     with pytest.raises(ValueError, match=r"contact\.turns"):
         HybridCoiling(surface)
     with pytest.raises(ValueError, match="shorter than the tape"):
-        HybridCoiling(config, window=WindowSettings(ahead=0.6))
+        HybridCoiling(config, window=dataclasses.replace(WindowSettings.from_config(config.model), ahead=0.6))
     assert "opposite sense" in not_applicable("hybrid-coil", equal)
 
 

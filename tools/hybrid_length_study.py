@@ -30,7 +30,7 @@ from mpi4py import MPI
 from tapecoil import theory
 from tapecoil.config import Config
 from tapecoil.measures.deployment import deployment_reference
-from tapecoil.verification.hybrid_coil import coil_side_by_side
+from tapecoil.verification.hybrid_coil import coil_side_by_side, describe_paired
 from tapecoil.verification.hybrid_deploy import deploy_side_by_side, time_to
 
 FREE = 0.031  # [m] the benchmark's 0.5 m at 36 rad leaves 31 mm off the coil
@@ -70,6 +70,12 @@ parser.add_argument(
     type=float,
     help="with --deploy: Newton's relative tolerance in the deployment alone (deployment.petsc_options "
     "snes_rtol; default solver.rtol, 1e-8)",
+)
+parser.add_argument(
+    "--tension-every",
+    type=float,
+    help="both models land on the hub angles this many radians apart from 6 rad on and compare the "
+    "outer turn's tension there, angle by angle (the wall times then include those steps)",
 )
 args = parser.parse_args()
 if not args.length > 2 * FREE:
@@ -166,7 +172,7 @@ if args.deploy:
     deploy(config, args.mesh, angle, args.lambda_end, not args.hybrid_only)
     raise SystemExit(0)
 config = with_beam_contact(config)
-both = coil_side_by_side(config, args.mesh, angle)
+both = coil_side_by_side(config, args.mesh, angle, tension_every=args.tension_every)
 if MPI.COMM_WORLD.rank == 0:
     print(
         f"L = {args.length:g} m, hub angle {angle:.4g} rad, mesh {args.mesh}, {MPI.COMM_WORLD.size} rank(s)"
@@ -178,6 +184,8 @@ if MPI.COMM_WORLD.rank == 0:
         cells = [f"{v:>14.6g}" if v is not None else f"{'-':>14}" for v in (value, full)]
         print(f"{key:<26} {cells[0]} {cells[1]} {ratio}")
     print(f"window moves: {len(both['windows']) - 1}")
+    if both["coiling_tension_paired"] is not None:
+        print(describe_paired(both["coiling_tension_paired"]))
     if args.json:
         record = {"length": args.length, "hub_angle": angle, "mesh": args.mesh, "ranks": MPI.COMM_WORLD.size}
         with open(args.json, "w") as f:

@@ -70,12 +70,12 @@ class WindowSettings:
             deployment's).
     """
 
-    ahead: float = 0.15
-    behind: float = 0.025
-    move: float = 0.025
-    tie_penalty: float = 1e2
-    beam_contact: str = "width"
-    release: float = 0.15
+    ahead: float
+    behind: float
+    move: float
+    tie_penalty: float
+    beam_contact: str
+    release: float
 
     @classmethod
     def from_config(cls, model) -> WindowSettings:
@@ -368,9 +368,11 @@ class HybridCoiling:
         h._set_load(0.0)
         return records
 
-    def coil(self, final_angle: float, on_step=None) -> None:
+    def coil(self, final_angle: float, on_step=None, stops: tuple[float, ...] = ()) -> None:
         """Turn the hub from where it is to ``final_angle`` [rad], the window moved with the
-        lift-off; ``on_step(record)`` after each converged step."""
+        lift-off, landing exactly on every hub angle in ``stops`` [rad] on the way (as the full
+        shell's :meth:`~tapecoil.phases.coiling_run.CoilingRun.coil`); ``on_step(record)``
+        after each converged step."""
         if not hasattr(self, "_t0"):
             self._t0 = time.perf_counter()
         tp = self.config.tape
@@ -379,7 +381,8 @@ class HybridCoiling:
         while self.angle < final_angle - 1e-12:
             # moved before a solve, never after: the state a call leaves is a converged one
             self._move_window()
-            target = min(final_angle, self.angle + self.move / rho)
+            ahead = [a for a in stops if self.angle + 1e-12 < a < final_angle]
+            target = min([final_angle, self.angle + self.move / rho, *ahead])
             span = target - self.angle
             first = min(self._next_step, span)
 

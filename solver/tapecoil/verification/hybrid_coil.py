@@ -4,6 +4,7 @@ tape, mesh and hub angle, one after the other: what both store and where both pu
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -44,6 +45,67 @@ def _band_mean(readings, start: float) -> float | None:
     return float(np.trapezoid(v, a) / (a[-1] - a[0]))
 
 
+def _at_stops(readings, stops: tuple[float, ...]) -> np.ndarray:
+    """The values of ``readings`` (hub angle, value) at the hub angles ``stops``."""
+    values = []
+    for stop in stops:
+        found = [v for a, v in readings if abs(a - stop) < 1e-9 and v is not None]
+        if not found:
+            raise RuntimeError(f"no outer-turn tension read at the hub angle {stop:g} rad")
+        values.append(found[-1])
+    return np.array(values, dtype=float)
+
+
+def _tension_mean(readings, stops: tuple[float, ...]) -> float | None:
+    """The outer turn's mean tension: over the ``stops`` (equally spaced), else over the hub
+    angle from TENSION_FROM on."""
+    if stops:
+        return float(_at_stops(readings, stops).mean())
+    return _band_mean(readings, TENSION_FROM)
+
+
+def tension_stops(angle: float, every: float | None) -> tuple[float, ...]:
+    """The hub angles [rad] at which both models read the outer turn's tension side by side: every
+    ``every`` [rad] from TENSION_FROM up to ``angle``, and ``angle``; none without ``every``."""
+    if every is None:
+        return ()
+    if not every > 0:
+        raise ValueError(f"the tension's stops must be a positive number of radians apart, not {every}")
+    count = math.floor((angle - TENSION_FROM) / every + 1e-9) + 1
+    stops = [TENSION_FROM + k * every for k in range(max(count, 0))]
+    return (*(a for a in stops if a < angle - 1e-9), angle)
+
+
+def paired_tension(hybrid: list, full: list, stops: tuple[float, ...]) -> dict | None:
+    """The two models' outer-turn tensions (hub angle, T - N) read at the same ``stops``: the
+    mean difference hybrid - full shell [N] and its standard error (the readings swing by tens of
+    per cent from one hub angle to the next as the station moves and nodes pass the lift-off,
+    so only readings at the same hub angles compare), also relative to the full shell's mean;
+    None without stops."""
+    if not stops:
+        return None
+    h, f = _at_stops(hybrid, stops), _at_stops(full, stops)
+    difference = h - f
+    error = float(difference.std(ddof=1) / math.sqrt(len(stops))) if len(stops) > 1 else math.nan
+    mean = float(f.mean())
+    return {
+        "stops": len(stops),
+        "difference": float(difference.mean()),
+        "standard_error": error,
+        "relative": float(difference.mean()) / mean,
+        "relative_standard_error": error / abs(mean),
+    }
+
+
+def describe_paired(paired: dict) -> str:
+    """One line of :func:`paired_tension`'s figures."""
+    return (
+        f"outer turn's tension at the same {paired['stops']} hub angles, hybrid - full shell: "
+        f"{paired['difference']:+.5f} N, standard error {paired['standard_error']:.5f} N "
+        f"({100 * paired['relative']:+.2f} % +- {100 * paired['relative_standard_error']:.2f} %)"
+    )
+
+
 def _largest_distance(a, b, comm) -> float:
     """The largest distance [m] between the nodes of two shells on the same mesh and ranks."""
     from tapecoil.models.nodes import Nodes
@@ -53,7 +115,9 @@ def _largest_distance(a, b, comm) -> float:
     return comm.allreduce(float(np.linalg.norm(gap, axis=0).max(initial=0.0)), op=MPI.MAX)
 
 
-def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_WORLD) -> dict:
+def coil_side_by_side(
+    config: Config, preset: str, angle: float, comm=MPI.COMM_WORLD, tension_every: float | None = None
+) -> dict:
     """The tape of ``config`` coiled to ``angle`` [rad] by the hybrid
     (:class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`, the window moved with the lift-off)
     and by the full shell (:class:`~tapecoil.phases.coiling_run.CoilingRun`), one after the other
@@ -66,7 +130,13 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
     readings (hub angle, T - N); and ``"settled"``: a full shell put in the hybrid's final
     configuration and settled there (:func:`~tapecoil.phases.hybrid_coiling_run.settle`, the
     stowed state of a hybrid run), its strain energy, the settling's figures and the largest
-    distance [m] of its nodes from the full shell's coiled ones (collective)."""
+    distance [m] of its nodes from the full shell's coiled ones (collective).
+
+    With ``tension_every`` [rad] both models land on the hub angles :func:`tension_stops` gives
+    (extra steps, which their wall times include), the outer turn's tension is each one's mean
+    over those angles, and ``"coiling_tension_paired"`` compares them angle by angle
+    (:func:`paired_tension`); without, each model's tension is its mean over its own steps, a
+    comparison that the readings' swing from step to step leaves uncertain by several per cent."""
     import dataclasses
 
     from tapecoil.phases.coiling import CoilingModel
@@ -88,8 +158,9 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
         if record.hub_angle >= TENSION_FROM:
             outer.append((record.hub_angle, (hybrid.outer_turn_tension() or {}).get("coiling_tension_outer")))
 
+    stops = tension_stops(angle, tension_every)
     hybrid.flatten()
-    hybrid.coil(angle, on_step=read_outer)
+    hybrid.coil(angle, on_step=read_outer, stops=stops)
     hybrid_wall = time.perf_counter() - t0
     # the full shell put in the hybrid's configuration and settled there (a hybrid run's
     # stowed state), to set beside the full shell's own coiling
@@ -110,7 +181,7 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
         "hybrid": {
             "strain_energy": hybrid.strain_energy(),
             **geometry,
-            "coiling_tension_outer": _band_mean(outer, TENSION_FROM),
+            "coiling_tension_outer": _tension_mean(outer, stops),
             "free_part_height": float(hybrid_height),
             "dofs": hybrid.dofs(),
             "steps": len(hybrid.records),
@@ -124,7 +195,7 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
     model = CoilingModel(case, comm)
     run = CoilingRun(model)
     run.flatten()
-    run.coil(angle)
+    run.coil(angle, stops=stops[:-1])
     full_wall = time.perf_counter() - t0
     rows = run.result.history
     coiling = [r for r in rows if r["phase"] == "coil"]
@@ -139,7 +210,7 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
         "coiled_length": last["coiled_length"],
         "outer_radius": last["outer_radius"],
         "free_part_height": float(section_centroid(model.model, station, comm)[2]),
-        "coiling_tension_outer": _band_mean(full_outer, TENSION_FROM),
+        "coiling_tension_outer": _tension_mean(full_outer, stops),
         "dofs": global_size(model.model.W),
         "steps": len(coiling),
         "newton_iterations": sum(int(r["newton_iterations"]) for r in rows),
@@ -154,6 +225,7 @@ def coil_side_by_side(config: Config, preset: str, angle: float, comm=MPI.COMM_W
     settled.solver.destroy()
     results["pull"] = pull
     results["coiling_tension_outer_steps"] = {"hybrid": outer, "full_shell": full_outer}
+    results["coiling_tension_paired"] = paired_tension(outer, full_outer, stops)
     return results
 
 
