@@ -40,7 +40,7 @@ validate: setup
 	$(RUN) tools/run-tests slow
 
 bench: setup
-	$(RUN) mpirun -n $(NP) python3 tools/bench.py --mesh $(MESH) --case $(CASE)
+	$(RUN) mpirun -n $(NP) python3 tools/bench.py --mesh $(MESH) --case $(CASE) $(if $(CONFIG),--config $(CONFIG))
 
 lint: setup
 	$(RUN) ruff check solver tests demos tools

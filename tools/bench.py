@@ -13,8 +13,11 @@ the pull held, into results/bench-payout-*; the same figures and the largest err
 its measures over the bands of lambda.
 --case hybrid-coil: the benchmark coiling (flattening, then 36 rad) by the shell-beam hybrid and
 by the full shell, one after the other in this session: each one's stored energy, coiled length,
-outer coil radius, outer turn's coiling tension (mean from 6 rad on), DOFs, steps, Newton
-iterations and wall time, and the hybrid's against the full shell's. The coiling alone.
+outer coil radius, outer turn's coiling tension, DOFs, steps, Newton iterations and wall time, and
+the hybrid's against the full shell's. The coiling alone. Both land on the hub angles every
+--tension-every rad (default 0.5) from 6 rad on, where the outer turn's tension is read and
+compared angle by angle (the mean difference and its standard error); the wall times include
+those steps.
 --case hybrid: the benchmark run (coiling to 36 rad, then the deployment to lambda = 1) with
 model.kind = "hybrid" and with the full shell, one after the other in this session, into
 results/bench-hybrid-*/{hybrid,shell}: every measure of both summaries row by row, and each
@@ -22,7 +25,8 @@ phase's steps, Newton iterations and wall time with the hybrid's against the ful
 hybrid coils, its coiled state settles into the full shell (the stowed state and the coil's
 measures), and the hybrid deploys from its own coiled state, its window following the lift-off
 down the coil.
-Run under mpirun for parallel figures: `make bench CASE=coil MESH=default NP=2`.
+Run under mpirun for parallel figures: `make bench CASE=coil MESH=default NP=2`; --config (make's
+CONFIG=) runs a case with the settings of a TOML configuration instead of the defaults.
 """
 
 import argparse
@@ -33,7 +37,7 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from tapecoil.config import MeshConfig, load_config
+from tapecoil.config import MeshConfig, ModelConfig, load_config
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.verification.tape import tape_fold
 
@@ -41,6 +45,13 @@ parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--mesh", default="coarse", choices=("coarse", "default", "fine"))
 parser.add_argument("--angle", type=float, default=1.0, help="final end rotation [rad]")
 parser.add_argument("--json", action="store_true")
+parser.add_argument("--config", help="a TOML configuration (default: the benchmark's defaults)")
+parser.add_argument(
+    "--tension-every",
+    type=float,
+    default=0.5,
+    help="--case hybrid-coil: the hub angles [rad] apart at which both models read the tension",
+)
 parser.add_argument(
     "--case", default="fold", choices=("fold", "coil", "deploy", "payout", "hybrid-coil", "hybrid")
 )
@@ -50,10 +61,10 @@ machine = f"{platform.machine()}, {platform.processor() or 'cpu'}, {MPI.COMM_WOR
 if args.case == "hybrid-coil":
     import dataclasses
 
-    from tapecoil.verification.hybrid_coil import coil_side_by_side
+    from tapecoil.verification.hybrid_coil import coil_side_by_side, describe_paired
 
-    config = load_config()
-    both = coil_side_by_side(config, args.mesh, config.coiling.hub_angle)
+    config = load_config(args.config)
+    both = coil_side_by_side(config, args.mesh, config.coiling.hub_angle, tension_every=args.tension_every)
     if MPI.COMM_WORLD.rank == 0:
         print(f"case: coiling, flattening + {config.coiling.hub_angle:g} rad, hybrid and full shell")
         print(f"mesh: {args.mesh}; machine: {machine}")
@@ -67,6 +78,7 @@ if args.case == "hybrid-coil":
                 if ratio is not None
                 else f"{key:<28} {cells[0]} {cells[1]}"
             )
+        print(describe_paired(both["coiling_tension_paired"]))
         print(
             "windows (hub angle, start, end):",
             ", ".join(f"({a:.2f}, {s:.4f}, {e:.4f})" for a, s, e in both["windows"]),
@@ -80,16 +92,22 @@ if args.case == "hybrid":
 
     from tapecoil.app.pipeline import run as run_pipeline
 
-    config = load_config()
+    config = load_config(args.config)
     config = dataclasses.replace(
         config,
         mesh=dataclasses.replace(config.mesh, preset=args.mesh),
         output=dataclasses.replace(config.output, report=False),
     )
     base = f"results/bench-hybrid-{args.mesh}-np{MPI.COMM_WORLD.size}"
+    # the shell's run takes the model's defaults: the window's keys act on the hybrid alone
+    cases = {
+        "hybrid": dataclasses.replace(config, model=dataclasses.replace(config.model, kind="hybrid")),
+        "shell": dataclasses.replace(config, model=ModelConfig(kind="shell")),
+    }
+    for case in cases.values():
+        case.check()
     summaries = {}
-    for kind in ("hybrid", "shell"):
-        case = dataclasses.replace(config, model=dataclasses.replace(config.model, kind=kind))
+    for kind, case in cases.items():
         summaries[kind] = run_pipeline(case, f"{base}/{kind}", progress=False, report=False)
     if MPI.COMM_WORLD.rank == 0:
         print("case: the benchmark run (coiling to 36 rad, deployment), model.kind hybrid and shell")
@@ -135,7 +153,7 @@ if args.case in ("coil", "deploy", "payout"):
     from tapecoil.phases.deployment_run import run_deployment
     from tapecoil.phases.payout import run_payout
 
-    config = load_config()
+    config = load_config(args.config)
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset=args.mesh))
     coil_dir = Path(f"results/bench-coil-{args.mesh}-np{MPI.COMM_WORLD.size}")
     if args.case == "coil":
@@ -171,7 +189,7 @@ if args.case in ("coil", "deploy", "payout"):
             print(f"{key:<36} {value:.4g}" if isinstance(value, float) else f"{key:<36} {value}")
     raise SystemExit(0)
 
-config = load_config()
+config = load_config(args.config)
 res = MeshResolution.from_config(MeshConfig(preset=args.mesh), config.tape.L)
 t0 = time.perf_counter()
 result = tape_fold(config, res, final_angle=args.angle)

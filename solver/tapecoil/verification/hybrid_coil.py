@@ -26,7 +26,7 @@ TENSION_FROM = 6.0
 # of coiling, which the full shell's guide in effect does not hold (docs/hybrid.md)
 FREE_PART_TOLERANCE = 1e-4
 # the full shell settled from the hybrid's coil against the full shell's own coiling, on this
-# case's short coil (coarse, 5 rad: measured 1.8e-9 and 2.1e-9 of L): equilibria of the same
+# case's short coil (coarse, 5 rad: measured 6.3e-9 and 7.3e-9 of L): equilibria of the same
 # discrete problem but for the winding angles that each path reads from its own states. On the
 # 36 rad benchmark (default mesh) the two stowed states differ by 3e-6 in energy and by up to
 # 1.2e-5 of L in place (docs/hybrid.md): the coil's turns settle within microns of each other
