@@ -144,6 +144,7 @@ def coil_side_by_side(
     from tapecoil.phases.hybrid_coiling import HybridCoiling
     from tapecoil.phases.hybrid_coiling_run import settle
 
+    stops = tension_stops(angle, tension_every)  # a bad spacing is refused before anything is built
     case = dataclasses.replace(
         config,
         mesh=dataclasses.replace(config.mesh, preset=preset),
@@ -158,7 +159,6 @@ def coil_side_by_side(
         if record.hub_angle >= TENSION_FROM:
             outer.append((record.hub_angle, (hybrid.outer_turn_tension() or {}).get("coiling_tension_outer")))
 
-    stops = tension_stops(angle, tension_every)
     hybrid.flatten()
     hybrid.coil(angle, on_step=read_outer, stops=stops)
     hybrid_wall = time.perf_counter() - t0
