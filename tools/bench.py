@@ -21,7 +21,8 @@ those steps.
 --case hybrid: the benchmark run (coiling to 36 rad, then the deployment to lambda = 1) with
 model.kind = "hybrid" and with the full shell, one after the other in this session, into
 results/bench-hybrid-*/{hybrid,shell}: every measure of both summaries row by row, and each
-phase's steps, Newton iterations and wall time with the hybrid's against the full shell's. The
+phase's steps, Newton iterations and wall time with the hybrid's against the full shell's, the
+peaks of the root's loads on the hub and the root torque's angular impulse to lambda = 0.9. The
 hybrid coils, its coiled state settles into the full shell (the stowed state and the coil's
 measures), and the hybrid deploys from its own coiled state, its window following the lift-off
 down the coil.
@@ -133,8 +134,24 @@ if args.case == "hybrid":
                     row(f"{phase}: {name}", other["computed"], value["computed"])
             for key in ("dofs", "steps", "newton_iterations", "wall_time"):
                 row(f"{phase}: {key}", h["run"][key], f["run"][key])
+            for key in ("root_torque_peak", "root_force_peak", "root_moment_peak", "root_force_end"):
+                if h.get(key) and f.get(key):
+                    row(f"{phase}: {key} [N, N m]", h[key]["value"], f[key]["value"])
             for kind, s in (("hybrid", h), ("shell", f)):
                 total[kind] += s["run"]["wall_time"]
+        if all("deployment" in s for s in summaries.values()):
+            from pathlib import Path
+
+            from tapecoil.post.plots import read_history
+            from tapecoil.verification.hybrid_deploy import IMPULSE_FRACTION, angular_impulse, time_to
+
+            impulse = {}
+            for kind in summaries:
+                history = read_history(Path(f"{base}/{kind}/deployment_history.csv"))
+                end = time_to(history, IMPULSE_FRACTION)
+                impulse[kind] = None if end is None else angular_impulse(history, end)
+            name = f"deployment: root's angular impulse to {IMPULSE_FRACTION:g} [N m s]"
+            row(name, impulse["hybrid"], impulse["shell"])
         moves = summaries["hybrid"].get("deployment", {}).get("run", {}).get("window_moves")
         row("deployment: the hybrid's window moves", moves, None)
         settling = summaries["hybrid"]["coiling"]["run"]["settling"]

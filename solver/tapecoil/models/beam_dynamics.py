@@ -59,7 +59,8 @@ class BeamDynamics:
     scheme's high-frequency spectral radius (1: the trapezoidal rule). :meth:`step` takes one time
     step of the beam alone; ``forms`` are its residual and Jacobian for a joint solve
     (:mod:`tapecoil.phases.hybrid_motion`); :meth:`kinetic_energy` and :meth:`momenta` read the
-    motion from the velocities.
+    motion from the velocities; ``reaction_form`` is the equation of motion at the last converged
+    time (its residual on held dofs: what holds them).
     """
 
     def __init__(
@@ -105,6 +106,14 @@ class BeamDynamics:
         self._kinetic = dolfinx.fem.form(
             (0.5 * self.line_density * ufl.dot(u, u) + 0.5 * ufl.dot(theta, inertia_now * theta)) * model.dx
         )
+        # the equation of motion at t_{n+1}, once the scheme has advanced and the beam committed
+        # (theta zero, T(0) = I: the rotation's residual is the spatial moment itself)
+        a_u, a_w = (ufl.as_vector([scheme.a_old[i] for i in range(k, k + 3)]) for k in (0, 3))
+        w = ufl.as_vector([scheme.v_old[i] for i in range(3, 6)])
+        end_moment = inertia_now * a_w + ufl.cross(w, inertia_now * w)
+        self.reaction_form = (
+            self.line_density * ufl.dot(a_u, du) + ufl.dot(end_moment, dtheta)
+        ) * model.dx + residual
         x = ufl.SpatialCoordinate(model.mesh) + ufl.split(model.q)[0]
         self._momenta = [dolfinx.fem.form(self.line_density * u[i] * model.dx) for i in range(3)] + [
             dolfinx.fem.form((self.line_density * ufl.cross(x, u)[i] + (inertia_now * theta)[i]) * model.dx)

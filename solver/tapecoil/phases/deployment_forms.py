@@ -160,13 +160,17 @@ class DeploymentForms:
         """The equation of motion at the converged state t_{n+1}, once the integrator has advanced
         (its velocity and acceleration are those of t_{n+1}): inertia plus internal forces, in the
         direction dq. On the root's dofs, what the attachment holds: the reaction."""
+        return self.inertia_at_end() + self.internal
+
+    def inertia_at_end(self):
+        """The inertia forces at t_{n+1} (the integrator advanced), in the direction dq."""
         model, ti = self.model, self.integrator
         du, dtheta = split_state(model.dq)
         a_u, a_theta = split_state(ti.a_old)
         _, v_theta = split_state(ti.v_old)
         Dd, _, d_ddot = director_rates(model, model.theta, v_theta, a_theta)
         inertia = self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(d_ddot, ufl.dot(Dd, dtheta))
-        return inertia * model.jacobian * model.dx + self.internal
+        return inertia * model.jacobian * model.dx
 
     def angular_momentum(self, frame):
         """The tape's angular momentum about the hub's axis (``frame``) per unit reference area,

@@ -70,6 +70,7 @@ from tapecoil.phases.deployment_forms import director_rates
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.hybrid_motion import HybridMotion
 from tapecoil.phases.release import EndHold, split_state
+from tapecoil.phases.root_loads import HybridRootLoads
 
 __all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment"]
 
@@ -85,7 +86,9 @@ class DeploymentRecord:
     fraction lambda and the coiled length [m], the window (start, end) [m] along the tape, the
     strain, contact and kinetic energy [J] (the ties' penalty apart), the work of the release's
     hold on the tape since release [J], the step's Newton iterations, cut-backs and rejected
-    steps, and the wall time since release [s]."""
+    steps, the wall time since release [s], the tape's angular momentum about the hub's axis
+    [kg m^2/s] and the root's loads on the hub (:class:`~tapecoil.phases.root_loads.HybridRootLoads`:
+    ``root_force_x`` ... ``root_torque`` [N], [N m])."""
 
     time: float
     step: float
@@ -100,6 +103,8 @@ class DeploymentRecord:
     cutbacks: int
     rejected_steps: int
     wall_time: float
+    angular_momentum: float
+    root_loads: dict
 
 
 class CoilLoosening(ContinuationError):
@@ -162,6 +167,7 @@ class HybridDeployment:
         coiling.carry_winding(old, self.hybrid)
         if start < old_start:  # the coil at rest: its placed sections settle as in a move
             self.placed_settling.append(settle_placed(self.hybrid, (old_start, tp.L), cfg))
+            self._check_settled(self.placed_settling[-1])
         self.hold = None
         self.motion = self._motion(self.hybrid, release=True)
         self.moves.append((0.0, *self.window()))
@@ -202,6 +208,10 @@ class HybridDeployment:
         self._contact = dolfinx.fem.form(hybrid.shell.contact.energy)
         beam = hybrid.beam
         self._beam_contact = dolfinx.fem.form(sum(beam.energy_terms)) if beam.energy_terms else None
+        frame = self.coiling.frame
+        spin = motion.shell_forms.angular_momentum(frame)
+        self._shell_momentum = dolfinx.fem.form(spin * shell.jacobian * shell.dx)
+        self.root_loads = HybridRootLoads(motion, frame)
         return motion
 
     # -- measures -------------------------------------------------------------------------------
@@ -231,6 +241,14 @@ class HybridDeployment:
     def kinetic_energy(self) -> float:
         """The kinetic energy of shell and beam [J], from the last converged rates (collective)."""
         return global_scalar(self._shell_kinetic, self.comm) + self.motion.beam.kinetic_energy()
+
+    def angular_momentum(self) -> float:
+        """The angular momentum of shell and beam about the hub's axis [kg m^2/s], from the last
+        converged rates (collective): the hub held, the root's torque changes it."""
+        frame = self.coiling.frame
+        momentum, spin = np.split(self.motion.beam.momenta(), 2)  # the beam's, about the origin
+        beam = np.dot(frame.axis, spin - np.cross(frame.axis_point, momentum))
+        return global_scalar(self._shell_momentum, self.comm) + float(beam)
 
     def lift_off(self) -> dict[str, float]:
         """The coiled length [m] and the deployed fraction lambda, by the full shell's measure
@@ -311,6 +329,7 @@ class HybridDeployment:
         new_rates = carry_motion(old, new, rates, probe)
         self.coiling.carry_winding(old, new)
         settling = settle_placed(new, old.shell.surface.xi_range[0], self.config)
+        self._check_settled(settling)
         motion.destroy()
         self.hold = None  # moved after the release: the end is free
         self.hybrid = new
@@ -325,6 +344,18 @@ class HybridDeployment:
             }
         )
         self.moves.append((self.time, *self.window()))
+
+    def _check_settled(self, settling: dict) -> None:
+        """Stop, the last converged state kept, where the sections a window move placed did not
+        settle: stepping on from their placement would release its strain as a vibration."""
+        if not settling["converged"]:
+            raise ContinuationError(
+                f"the hybrid's window move at t = {self.time:.6g} s: the sections placed from "
+                f"the beam did not settle on the shell ({settling['iterations']} Newton "
+                "iterations); deploy this tape with the full shell (model.kind = 'shell'), or "
+                f"with a finer mesh. Last converged time {self.time:.6g} s",
+                self.time,
+            )
 
     def _commit(self, motion) -> None:
         if self.hold is not None:  # its work over the step, before the state moves on
@@ -351,6 +382,8 @@ class HybridDeployment:
             0 if step is None else int(step.cutbacks),
             0 if step is None else int(step.rejected),
             0.0 if t0 is None else time.perf_counter() - t0,
+            self.angular_momentum(),
+            self.root_loads(),
         )
 
     def run(self, on_step=None) -> str:

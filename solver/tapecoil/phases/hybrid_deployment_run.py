@@ -8,7 +8,8 @@ whenever the runner writes it (the ParaView series and the surface snapshots, ev
 closest-turns measure and the checkpoint deployed/ are the whole tape's. The history has the
 full shell's deployment columns that the hybrid measures (the deployed fraction by the same
 definition, the strain, contact and kinetic energies and the energy balance's remainder), with
-the window's ends and the hybrid's DOFs; the root's loads are not measured.
+the window's ends and the hybrid's DOFs, and the root's loads on the hub
+(:class:`~tapecoil.phases.root_loads.HybridRootLoads`) with their peaks in the summary.
 
 A completed hybrid deployment is not recomputed on ``--resume`` (its checkpoint keeps the
 history); a stopped one deploys again from the release: the hybrid's state in time is not
@@ -23,6 +24,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.measures.deployment import root_load_peaks
 from tapecoil.phases.deployment_run import deployment_summary, step_figures
 from tapecoil.phases.hybrid_deployment import DeploymentRecord, HybridDeployment
 from tapecoil.phases.runner import LOG, Phase, run_phase
@@ -98,6 +100,9 @@ class HybridDeploymentPhase(Phase):
             "external_work": record.hold_work,
             # what the scheme and the window moves took out of the tape's energy (or put in)
             "dissipated_energy": self._stowed_energy + record.hold_work - total,
+            "angular_momentum": record.angular_momentum,
+            # the force [N] and moment [N m] the tape exerts on the hub through its root
+            **record.root_loads,
             "window_start": record.window[0],
             "window_end": record.window[1],
             "dofs": self.deployment.dofs(),
@@ -149,6 +154,8 @@ class HybridDeploymentPhase(Phase):
         placed = self.placed_settling
         return {
             **deployment_summary(self, interrupted, self.config, self.config.deployment.rho_inf, "alpha"),
+            # (a checkpoint of a hybrid run from before the root's loads were read has none)
+            **(root_load_peaks(history) if "root_torque" in history[0] else {}),
             "run": {
                 "model": "hybrid",
                 "ranks": self.comm.size,

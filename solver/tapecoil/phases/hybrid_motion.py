@@ -28,7 +28,9 @@ class HybridMotion:
     those ``loads(scheme)`` gives for the shell's scheme: a residual form of the shell's state
     taken as it is (a hold's, at the scheme's level) and point forces on the shell's dofs.
     :meth:`step` takes one step; the parts are at rest unless :meth:`set_rates` starts them
-    moving."""
+    moving. ``shell_forms``: the shell's inertia (a
+    :class:`~tapecoil.phases.deployment_forms.DeploymentForms`), ``beam``: the beam's
+    :class:`~tapecoil.models.beam_dynamics.BeamDynamics`."""
 
     def __init__(
         self,
@@ -44,7 +46,8 @@ class HybridMotion:
         self.hybrid = hybrid
         shell = hybrid.shell
         self.shell_scheme = GeneralizedAlpha(shell.model.q, rho_inf)
-        inertia = DeploymentForms(
+        # the shell's inertia (its internal forces are the shell problem's residual, averaged)
+        self.shell_forms = inertia = DeploymentForms(
             shell.model, self.shell_scheme, None, tape, energy=shell.model.strain_energy
         )
         F_static, _ = shell.forms()

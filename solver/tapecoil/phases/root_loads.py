@@ -29,6 +29,47 @@ from tapecoil.core.rotation import rotation_matrix
 COMPONENTS = ("x", "y", "z")
 
 
+def shell_root_reaction(f, q, nodes, root, angles_of, axis_point, eps: float = 1e-6) -> np.ndarray:
+    """The attachment's force [N] and moment [N m] about ``axis_point`` on a shell's root, from
+    the reaction ``f`` (a dof array: the equation of motion's residual) at the state ``q``, over
+    the ``root`` nodes of ``nodes`` (:class:`~tapecoil.models.nodes.Nodes`) this rank owns; the
+    director angles of turned directors by ``angles_of(d, xi, theta1)`` (rank-local, (6,))."""
+    f_u = f[nodes.u_dofs[root]]  # (n, 3): the attachment's force on the tape at each node
+    f_theta = f[nodes.theta_dofs[root]]
+    x = nodes.positions(q)[:, root]
+    d = nodes.directors(q)[:, root]
+    xi = nodes.xi[:, root]
+    theta1 = q[nodes.theta_dofs[root, 1]]
+    c = np.asarray(axis_point, dtype=float)[:, None]
+    moment = np.zeros(3)
+    for k, e in enumerate(np.eye(3) if len(root) else ()):  # a rank may hold none of the root
+        lever = np.cross(e, (x - c).T)  # (n, 3): the rate of x in a rotation about e
+        turned = [angles_of(rotation_matrix(e, s * eps) @ d, xi, theta1) for s in (1, -1)]
+        rate = (turned[0] - turned[1]).T / (2 * eps)
+        moment[k] = np.sum(f_u * lever) + np.sum(f_theta * rate)
+    return np.concatenate([f_u.sum(axis=0), moment])
+
+
+def beam_root_reaction(f, x, u_dofs, theta_dofs, axis_point) -> np.ndarray:
+    """The attachment's force [N] and moment [N m] about ``axis_point`` on a beam's root nodes at
+    ``x`` (n, 3) [m], from the reaction ``f`` (a dof array) on their displacement and rotation
+    dofs ``u_dofs``, ``theta_dofs`` (n, 3), the rotation's being the spatial rotation vector of a
+    step at its start (zero: its residual is the moment itself; rank-local, (6,))."""
+    f_u, f_theta = f[u_dofs].reshape(-1, 3), f[theta_dofs].reshape(-1, 3)
+    arm = np.asarray(x, dtype=float).reshape(-1, 3) - np.asarray(axis_point, dtype=float)
+    return np.concatenate([f_u.sum(axis=0), f_theta.sum(axis=0) + np.cross(arm, f_u).sum(axis=0)])
+
+
+def loads_on_hub(local: np.ndarray, comm, axis) -> dict[str, float]:
+    """The root's loads on the hub from the ranks' shares ``local`` of the attachment's force and
+    moment on the tape (collective): their opposite, and the torque about the hub's ``axis``."""
+    total = -comm.allreduce(np.asarray(local, dtype=float), op=MPI.SUM)
+    out = {f"root_force_{a}": float(v) for a, v in zip(COMPONENTS, total[:3], strict=True)}
+    out.update({f"root_moment_{a}": float(v) for a, v in zip(COMPONENTS, total[3:], strict=True)})
+    out["root_torque"] = float(np.dot(total[3:], axis))
+    return out
+
+
 class RootLoads:
     """The root's loads on the hub of a :class:`~tapecoil.phases.deployment.DeploymentModel`;
     call it after a converged step (collective)."""
@@ -42,8 +83,7 @@ class RootLoads:
         held = owned_constrained_dofs(model.model.W, model.bcs)
         n_owned = nodes.space.dofmap.index_map.size_local
         # the root's nodes this rank owns: those whose displacement the attachment holds
-        at_root = np.isin(nodes.u_dofs[:n_owned, 0], held)
-        self.root = np.flatnonzero(at_root)
+        self.root = np.flatnonzero(np.isin(nodes.u_dofs[:n_owned, 0], held))
         self.nodes = nodes
         self.frame = tape.frame
 
@@ -51,23 +91,54 @@ class RootLoads:
         m = self.m
         assemble_into(self.reaction, self.form)
         m.tape.add_self_contact_force(self.reaction)
-        f, q, nodes, root = self.reaction.x.array, m.model.q.x.array, self.nodes, self.root
-        f_u = f[nodes.u_dofs[root]]  # (n, 3): the attachment's force on the tape at each node
-        f_theta = f[nodes.theta_dofs[root]]
-        x = nodes.positions(q)[:, root]
-        d = nodes.directors(q)[:, root]
-        xi = nodes.xi[:, root]
-        theta1 = q[nodes.theta_dofs[root, 1]]
-        c = self.frame.axis_point[:, None]
-        moment = np.zeros(3)
-        for k, e in enumerate(np.eye(3) if len(root) else ()):  # a rank may hold none of the root
-            lever = np.cross(e, (x - c).T)  # (n, 3): the rate of x in a rotation about e
-            turned = [m.model.angles_of(rotation_matrix(e, s * self.eps) @ d, xi, theta1) for s in (1, -1)]
-            rate = (turned[0] - turned[1]).T / (2 * self.eps)
-            moment[k] = np.sum(f_u * lever) + np.sum(f_theta * rate)
-        local = np.concatenate([f_u.sum(axis=0), moment])
-        total = -m.comm.allreduce(local, op=MPI.SUM)  # on the hub: the opposite of on the tape
-        out = {f"root_force_{a}": float(v) for a, v in zip(COMPONENTS, total[:3], strict=True)}
-        out.update({f"root_moment_{a}": float(v) for a, v in zip(COMPONENTS, total[3:], strict=True)})
-        out["root_torque"] = float(np.dot(total[3:], self.frame.axis))
-        return out
+        local = shell_root_reaction(
+            self.reaction.x.array,
+            m.model.q.x.array,
+            self.nodes,
+            self.root,
+            m.model.angles_of,
+            self.frame.axis_point,
+            self.eps,
+        )
+        return loads_on_hub(local, m.comm, self.frame.axis)
+
+
+class HybridRootLoads:
+    """The root's loads on the hub of the shell-beam hybrid in time (a
+    :class:`~tapecoil.phases.hybrid_motion.HybridMotion` of a hybrid on the hub of ``frame``):
+    the reaction of the beam's clamped root node while the shell window starts past the root,
+    of the window's attached root edge once it starts there, each the equation of motion at the
+    converged state t_{n+1} on the held dofs, as the full shell's (:class:`RootLoads`); call it
+    after a converged step, once the motion has committed it (collective)."""
+
+    def __init__(self, motion, frame, eps: float = 1e-6):
+        shell, beam = motion.hybrid.shell, motion.hybrid.beam
+        self.frame, self.eps, self.comm = frame, eps, shell.comm
+        self.shell = shell.root is not None
+        if self.shell:  # the window's own root, attached to the hub
+            model = shell.model
+            form = motion.shell_forms.inertia_at_end() + shell.forms()[0]
+            self.model, self.nodes = model, shell.contact.nodes
+            held = owned_constrained_dofs(model.W, shell.root.bcs)
+            n_owned = self.nodes.space.dofmap.index_map.size_local
+            self.root = np.flatnonzero(np.isin(self.nodes.u_dofs[:n_owned, 0], held))
+        else:  # the beam's root node, clamped to the hub
+            model = beam.model
+            form = motion.beam.reaction_form
+            self.model = model
+            held = owned_constrained_dofs(model.W, beam.bcs)
+            self.root = np.flatnonzero(np.isin(model.node_u_dofs[:, 0], held))
+        self.form = dolfinx.fem.form(form)
+        self.reaction = dolfinx.fem.Function(self.model.W)
+
+    def __call__(self) -> dict[str, float]:
+        assemble_into(self.reaction, self.form)
+        f, q = self.reaction.x.array, self.model.q.x.array
+        c = self.frame.axis_point
+        if self.shell:
+            local = shell_root_reaction(f, q, self.nodes, self.root, self.model.angles_of, c, self.eps)
+        else:
+            m, root = self.model, self.root
+            x = m.node_points[root] + q[m.node_u_dofs[root]]
+            local = beam_root_reaction(f, x, m.node_u_dofs[root], m.node_theta_dofs[root], c)
+        return loads_on_hub(local, self.comm, self.frame.axis)

@@ -152,7 +152,8 @@ def _run_table(summary: dict) -> str:
             "<p>Deployed by the hybrid from its own coiled state, its shell window following the "
             f"lift-off down the coil ({deployment['window_moves']} moves; DOFs above at their "
             "most). The pictures and snapshots are the hybrid's state carried into the full "
-            "shell; the root's loads are not measured.</p>"
+            "shell; the root's loads are the reaction of the flattened beam's clamped root node, "
+            "and of the window's root edge once the window reaches the root.</p>"
         )
     return "\n".join(lines)
 
