@@ -125,10 +125,6 @@ def test_integer_accepted_for_float(tmp_path):
             r"model\.kind = 'hybrid' needs deployment\.hub = 'fixed'",
         ),
         (
-            {"model": {"kind": "hybrid"}, "deployment": {"gravity": [0.0, 0.0, -9.81]}},
-            r"model\.kind = 'hybrid' needs deployment\.gravity = \[0, 0, 0\]",
-        ),
-        (
             {"model": {"kind": "hybrid"}, "deployment": {"rho_inf": 1.0}},
             r"model\.kind = 'hybrid' needs deployment\.rho_inf < 1",
         ),

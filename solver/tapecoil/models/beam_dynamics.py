@@ -56,7 +56,8 @@ class BeamDynamics:
 
     ``line_density``: rho_A [kg/m]; ``rotary_inertia``: J1, J2, J3 [kg m], the section's mass
     moments of inertia per unit length about the tangent and its axes 2 and 3. ``rho_inf``: the
-    scheme's high-frequency spectral radius (1: the trapezoidal rule). :meth:`step` takes one time
+    scheme's high-frequency spectral radius (1: the trapezoidal rule); ``gravity`` (3,) [m/s^2]:
+    the beam's weight rho_A g per unit length, from the start. :meth:`step` takes one time
     step of the beam alone; ``forms`` are its residual and Jacobian for a joint solve
     (:mod:`tapecoil.phases.hybrid_motion`); :meth:`kinetic_energy` and :meth:`momenta` read the
     motion from the velocities; ``reaction_form`` is the equation of motion at the last converged
@@ -64,7 +65,13 @@ class BeamDynamics:
     """
 
     def __init__(
-        self, problem, line_density: float, rotary_inertia, rho_inf: float = 0.9, rtol: float = 1e-9
+        self,
+        problem,
+        line_density: float,
+        rotary_inertia,
+        rho_inf: float = 0.9,
+        rtol: float = 1e-9,
+        gravity=(0.0, 0.0, 0.0),
     ):
         if not line_density > 0:
             raise ValueError(f"a beam's line density must be positive, got {line_density!r} kg/m")
@@ -94,6 +101,14 @@ class BeamDynamics:
         ) * model.dx
         residual, _ = problem.forms()
         F = self.inertia_form + scheme.force_average(residual)
+        # the weight (constant: not averaged) and its work over a step; None without gravity
+        self.weight = self.weight_work = None
+        if any(float(c) != 0.0 for c in gravity):
+            g = ufl.as_vector([float(c) for c in gravity])
+            self.weight = self.line_density * ufl.dot(g, du) * model.dx
+            u_old = ufl.as_vector([scheme.q_old[i] for i in range(3)])
+            self.weight_work = self.line_density * ufl.dot(g, ufl.split(model.q)[0] - u_old) * model.dx
+            F = F - self.weight
         self.forms = (F, ufl.derivative(F, model.q, ufl.TrialFunction(model.W)))
         self.rtol = rtol
         self.solver = None  # the beam's own, for steps of the beam alone
@@ -114,6 +129,8 @@ class BeamDynamics:
         self.reaction_form = (
             self.line_density * ufl.dot(a_u, du) + ufl.dot(end_moment, dtheta)
         ) * model.dx + residual
+        if self.weight is not None:
+            self.reaction_form = self.reaction_form - self.weight
         x = ufl.SpatialCoordinate(model.mesh) + ufl.split(model.q)[0]
         self._momenta = [dolfinx.fem.form(self.line_density * u[i] * model.dx) for i in range(3)] + [
             dolfinx.fem.form((self.line_density * ufl.cross(x, u)[i] + (inertia_now * theta)[i]) * model.dx)

@@ -11,7 +11,10 @@ go, the state carried over
 (:func:`~tapecoil.models.window.carry_over`), and the end is held by the full shell's release
 hold (:class:`~tapecoil.phases.release.EndHold`: a spring to the stowed end and the dead
 forces that held it there, let go over ``deployment.release_time``). The hub is held at its
-stowed angle; the root stays clamped to it; the flattened beam on the coil and the window's
+stowed angle; the root stays clamped to it; with ``deployment.gravity`` the shell and the beam
+carry their weight from release (starting to fall at g where the hold does not hold them:
+:meth:`~tapecoil.phases.hybrid_motion.HybridMotion.start_falling`); the flattened beam on the
+coil and the window's
 shell rest on the spiral of turns, their winding angles read from the state after every step,
 as in coiling.
 
@@ -84,11 +87,12 @@ PROBE_SHARE = 1e-3
 class DeploymentRecord:
     """A converged step of the hybrid's deployment: time [s], the step to it [s], the deployed
     fraction lambda and the coiled length [m], the window (start, end) [m] along the tape, the
-    strain, contact and kinetic energy [J] (the ties' penalty apart), the work of the release's
-    hold on the tape since release [J], the step's Newton iterations, cut-backs and rejected
-    steps, the wall time since release [s], the tape's angular momentum about the hub's axis
-    [kg m^2/s] and the root's loads on the hub (:class:`~tapecoil.phases.root_loads.HybridRootLoads`:
-    ``root_force_x`` ... ``root_torque`` [N], [N m])."""
+    strain, contact and kinetic energy [J] (the ties' penalty apart), the work of the loads on
+    the tape since release (the release's hold, gravity) [J], the step's Newton iterations,
+    cut-backs and rejected steps, the wall time since release [s], the tape's angular momentum
+    about the hub's axis [kg m^2/s] and the root's loads on the hub
+    (:class:`~tapecoil.phases.root_loads.HybridRootLoads`: ``root_force_x`` ... ``root_torque``
+    [N], [N m])."""
 
     time: float
     step: float
@@ -98,7 +102,7 @@ class DeploymentRecord:
     strain_energy: float
     contact_energy: float
     kinetic_energy: float
-    hold_work: float
+    external_work: float
     iterations: int
     cutbacks: int
     rejected_steps: int
@@ -145,7 +149,7 @@ class HybridDeployment:
         self.rotary_inertia = tp.density * np.array([arc.EI2 + arc.EI3, arc.EI2, arc.EI3]) / tp.E
         self.options = {"pc_type": "cholesky", **cfg.solver.petsc_options, **d.petsc_options}
         self.time = 0.0
-        self.hold_work = 0.0
+        self.external_work = 0.0
         # the flattened beam's largest gap to its turn behind the window [m] and where [m]
         self.beam_gap = (0.0, 0.0)
         self.records: list[DeploymentRecord] = []
@@ -170,6 +174,8 @@ class HybridDeployment:
             self._check_settled(self.placed_settling[-1])
         self.hold = None
         self.motion = self._motion(self.hybrid, release=True)
+        if np.any(self.motion.gravity):
+            self.motion.start_falling()
         self.moves.append((0.0, *self.window()))
 
     # -- the hybrid and its motion -------------------------------------------------------------
@@ -196,6 +202,7 @@ class HybridDeployment:
             settings=cfg.solver,
             options=self.options,
             loads=hold_loads if release else None,
+            gravity=cfg.deployment.gravity,
         )
         motion.set_load(self.angle)
         shell = hybrid.shell.model
@@ -359,7 +366,8 @@ class HybridDeployment:
 
     def _commit(self, motion) -> None:
         if self.hold is not None:  # its work over the step, before the state moves on
-            self.hold_work += self.hold.work()
+            self.external_work += self.hold.work()
+        self.external_work += motion.weight_work()
         motion.commit_step()
 
     def record(self, step=None, t0: float | None = None) -> DeploymentRecord:
@@ -377,7 +385,7 @@ class HybridDeployment:
             self.strain_energy(),
             self.contact_energy(),
             self.kinetic_energy(),
-            self.hold_work,
+            self.external_work,
             0 if step is None else int(step.iterations),
             0 if step is None else int(step.cutbacks),
             0 if step is None else int(step.rejected),

@@ -97,9 +97,9 @@ class HybridDeploymentPhase(Phase):
             "strain_energy": record.strain_energy,
             "contact_energy": record.contact_energy,
             "kinetic_energy": record.kinetic_energy,
-            "external_work": record.hold_work,
+            "external_work": record.external_work,
             # what the scheme and the window moves took out of the tape's energy (or put in)
-            "dissipated_energy": self._stowed_energy + record.hold_work - total,
+            "dissipated_energy": self._stowed_energy + record.external_work - total,
             "angular_momentum": record.angular_momentum,
             # the force [N] and moment [N m] the tape exerts on the hub through its root
             **record.root_loads,

@@ -12,9 +12,14 @@ from a zero rotation.
 
 from __future__ import annotations
 
+import dolfinx
+import numpy as np
+
 from tapecoil.config import SolverConfig, TapeConfig
+from tapecoil.core.dofs import global_scalar
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.models.beam_dynamics import BeamDynamics
+from tapecoil.models.nodes import Nodes
 from tapecoil.phases.deployment_forms import DeploymentForms
 
 __all__ = ["HybridMotion"]
@@ -26,7 +31,9 @@ class HybridMotion:
     ``line_density`` [kg/m] and ``rotary_inertia`` (J1, J2, J3) [kg m] the beam's. The loads
     are those of the hybrid's load parameter as it stands (:meth:`set_load` changes it), and
     those ``loads(scheme)`` gives for the shell's scheme: a residual form of the shell's state
-    taken as it is (a hold's, at the scheme's level) and point forces on the shell's dofs.
+    taken as it is (a hold's, at the scheme's level) and point forces on the shell's dofs, and
+    the weight of shell and beam under ``gravity`` (3,) [m/s^2] (``shell_weight``: the shell's
+    virtual work form of it, None without gravity).
     :meth:`step` takes one step; the parts are at rest unless :meth:`set_rates` starts them
     moving. ``shell_forms``: the shell's inertia (a
     :class:`~tapecoil.phases.deployment_forms.DeploymentForms`), ``beam``: the beam's
@@ -42,6 +49,7 @@ class HybridMotion:
         settings: SolverConfig | None = None,
         options: dict | None = None,
         loads=None,
+        gravity=(0.0, 0.0, 0.0),
     ):
         self.hybrid = hybrid
         shell = hybrid.shell
@@ -52,12 +60,23 @@ class HybridMotion:
         )
         F_static, _ = shell.forms()
         forces = self.shell_scheme.force_average(F_static)
+        # the weight of shell and beam (a ground test), None without gravity
+        self.gravity = np.asarray(gravity, dtype=float)
+        self.shell_weight = None
+        work = []
+        if np.any(self.gravity):
+            self.shell_weight = inertia.weight(self.gravity)
+            forces = forces - self.shell_weight
+            work.append(inertia.weight_work(self.gravity))
         point_forces = []
         if loads is not None:
             form, point_forces = loads(self.shell_scheme)
             forces = forces + form
         F_s, J_s = inertia.alpha_forms(forces)
-        self.beam = BeamDynamics(hybrid.beam, line_density, rotary_inertia, rho_inf=rho_inf)
+        self.beam = BeamDynamics(hybrid.beam, line_density, rotary_inertia, rho_inf=rho_inf, gravity=gravity)
+        if self.beam.weight_work is not None:
+            work.append(self.beam.weight_work)
+        self._weight_work = [dolfinx.fem.form(w) for w in work]
         self.settings = settings or SolverConfig()
         shell.point_forces.extend(point_forces)
         self.solver = hybrid._solver(F_s, J_s, self.settings, options, beam_forms=self.beam.forms)
@@ -102,6 +121,28 @@ class HybridMotion:
         self.commit_step()
         self.time += dt
         return result
+
+    def weight_work(self) -> float:
+        """Gravity's work on shell and beam over the step just solved [J] (before the schemes
+        move on; collective)."""
+        comm = self.hybrid.shell.comm
+        return sum(global_scalar(form, comm) for form in self._weight_work)
+
+    def start_falling(self) -> None:
+        """At rest under the release's hold, which balances the internal forces, with gravity: the
+        acceleration g on every free translation of shell and beam, the held ones at rest (the
+        consistent start but for the consistent mass's coupling across the root's element)."""
+        parts = (
+            (self.shell_scheme, Nodes(self.hybrid.shell.model).u_dofs, self.hybrid.shell.bcs),
+            (self.beam.scheme, self.hybrid.beam.model.node_u_dofs, self.hybrid.beam.bcs),
+        )
+        for scheme, u_dofs, bcs in parts:
+            a = scheme.a_old.x.array
+            a[:] = 0.0
+            a[u_dofs] = self.gravity
+            for bc in bcs:
+                a[bc.dof_indices()[0]] = 0.0
+            scheme.a_old.x.scatter_forward()
 
     def commit_step(self) -> None:
         """After a converged step: each scheme moves on, then the hybrid commits (the ties'

@@ -96,7 +96,7 @@ def deploy_side_by_side(
         "moves": [list(m) for m in deployment.moves],
         "placed_settling": deployment.placed_settling,
         "energies": [
-            (r.time, r.strain_energy, r.contact_energy, r.kinetic_energy, r.hold_work) for r in records
+            (r.time, r.strain_energy, r.contact_energy, r.kinetic_energy, r.external_work) for r in records
         ],
     }
     deployment.destroy()
