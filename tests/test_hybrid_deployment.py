@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 from scipy.spatial.transform import Rotation
-from test_hybrid_coiling import coarse  # the coarse benchmark coiled to a hub angle
+from test_hybrid_coiling import coarse, coiled  # the coarse benchmark coiled to a hub angle
 
 from tapecoil.config import Config
 from tapecoil.core.dofs import owned_constrained_dofs
@@ -149,13 +149,23 @@ def short_deployment(comm, t_end=0.02, run=True, angle=4.5, window_release=0.025
         deployment=dataclasses.replace(config.deployment, t_end=t_end, gravity=list(gravity)),
         model=dataclasses.replace(config.model, window_release=window_release),
     )
-    coiling = HybridCoiling(config, comm=comm)
-    coiling.flatten()
-    coiling.coil(angle)
-    deployment = HybridDeployment(coiling)
+    deployment = HybridDeployment(coiled(comm, angle), config)
     if run:
         deployment.run()
     return deployment
+
+
+def test_a_coiled_tape_deploys_only_as_it_was_coiled():
+    """A deployment's configuration may differ from its coiling's in what acts from the release
+    on ([deployment], model.window_release), and in nothing else: a thicker tape is refused,
+    naming the table, before anything is built."""
+    from tapecoil.phases.hybrid_deployment import HybridDeployment
+
+    coiling = HybridCoiling(coarse(4.5))
+    config = coarse(4.5)
+    thicker = dataclasses.replace(config, tape=dataclasses.replace(config.tape, h=2 * config.tape.h))
+    with pytest.raises(ValueError, match=r"differs from the coiling's in \[tape\]"):
+        HybridDeployment(coiling, thicker)
 
 
 def test_the_hybrids_root_loads_balance_the_tapes_momenta():

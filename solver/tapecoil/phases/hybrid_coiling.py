@@ -66,8 +66,6 @@ class WindowSettings:
             whole elements).
         tie_penalty: the ties' penalty factor (:class:`~tapecoil.models.interface.RigidSectionTie`).
         beam_contact: the flattened beam on the turns by its "line" or across its "width".
-        release: the coil the window holds behind the lift-off at the release [m] (the
-            deployment's).
     """
 
     ahead: float
@@ -75,7 +73,6 @@ class WindowSettings:
     move: float
     tie_penalty: float
     beam_contact: str
-    release: float
 
     @classmethod
     def from_config(cls, model) -> WindowSettings:
@@ -86,7 +83,6 @@ class WindowSettings:
             model.window_move,
             model.tie_penalty,
             model.beam_contact,
-            model.window_release,
         )
 
 

@@ -52,6 +52,7 @@ a lifted beam.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -118,6 +119,27 @@ class CoilLoosening(ContinuationError):
     into the turns): the hybrid stops there, its last converged state kept."""
 
 
+def _deploying(coiled, config):
+    """``config`` for the deployment of a tape coiled under ``coiled`` (both
+    :class:`~tapecoil.config.Config`); ValueError where they differ in more than what acts from
+    the release on."""
+    same = dataclasses.replace(
+        config,
+        deployment=coiled.deployment,
+        model=dataclasses.replace(config.model, window_release=coiled.model.window_release),
+    )
+    if same != coiled:
+        differ = [
+            f.name for f in dataclasses.fields(coiled) if getattr(same, f.name) != getattr(coiled, f.name)
+        ]
+        raise ValueError(
+            f"the hybrid deploys the tape as it was coiled: the configuration differs from the "
+            f"coiling's in [{'], ['.join(differ)}] (only [deployment] and model.window_release "
+            "act from the release on)"
+        )
+    return config
+
+
 class _Restart(Exception):
     """Raised from the step callback to leave the time stepping: after a window move (to step
     on with the new hybrid) or once deployed."""
@@ -129,11 +151,16 @@ class HybridDeployment:
     ``deployment.lambda_end`` or ``deployment.t_end``; ``records`` holds a row per converged
     step and ``moves`` the window's places, (time, start, end). The joint solvers read PETSc
     options under ``hybrid_deploy<k>_``, k the window's number from 0; ``solver.petsc_options``
-    and ``deployment.petsc_options`` reach all of them."""
+    and ``deployment.petsc_options`` reach all of them.
 
-    def __init__(self, coiling):
+    ``config``: the deployment's configuration, by default the coiling's. It may differ from
+    the coiling's in its [deployment] table and in ``model.window_release``, which act from the
+    release on, so that one coiled tape deploys under several settings; the coiling is left as
+    it was."""
+
+    def __init__(self, coiling, config=None):
         self.coiling = coiling
-        self.config = cfg = coiling.config
+        self.config = cfg = coiling.config if config is None else _deploying(coiling.config, config)
         self.comm = coiling.comm
         d = cfg.deployment
         need = hybrid_need(cfg)
@@ -163,7 +190,7 @@ class HybridDeployment:
         # coil shorter than that keeps the coiling's window, and its flattened beam at the root
         lift = self._coiled(old)[-1]
         element = coiling.element
-        wanted = element * math.floor((lift - coiling.window.release) / element + 1e-9)
+        wanted = element * math.floor((lift - cfg.model.window_release) / element + 1e-9)
         old_start = old.shell.surface.xi_range[0][0]
         start = min(old_start, wanted) if wanted > 0 else old_start
         self.hybrid = coiling.build(start, self._name(), released=True, end=tp.L)

@@ -127,7 +127,7 @@ class HybridDeploymentPhase(Phase):
     def advance(self) -> None:
         d = self.config.deployment
         self._t0 = time.perf_counter()
-        self.deployment = deployment = HybridDeployment(self.coiling)
+        self.deployment = deployment = HybridDeployment(self.coiling, self.config)
         LOG.info(
             "deployment with the hybrid: generalized-alpha, rho_inf = %g, to lambda = %g, window %g-%g m",
             deployment.rho_inf,
