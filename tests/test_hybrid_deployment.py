@@ -168,6 +168,19 @@ def test_a_coiled_tape_deploys_only_as_it_was_coiled():
         HybridDeployment(coiling, thicker)
 
 
+def test_the_release_starts_from_rest():
+    """The coarse 4.5 rad coil, whose window grows at release from the coiling's (to 0.25 m) to
+    the free end, held for the first millisecond of the release: the tape stays at rest, its
+    kinetic energy below 1e-8 J (measured 7e-10 J). The sections
+    placed from the beam are not the shell's equilibrium (their residual forces up to 2.6 N);
+    before the whole window was settled at release, they rang under the hold with 1.8e-6 J from
+    the first step."""
+    deployment = short_deployment(MPI.COMM_WORLD, t_end=0.001)
+    assert deployment.window() == (pytest.approx(0.025), pytest.approx(0.5))
+    assert deployment.coiling.hybrid.shell.surface.xi_range[0][1] < 0.3  # the coiling's window
+    assert max(r.kinetic_energy for r in deployment.records) < 1e-8
+
+
 def test_the_hybrids_root_loads_balance_the_tapes_momenta():
     """The coarse 4.5 rad coil deployed for 10 ms under gravity along the hub's axis (y), its
     root first the flattened beam's clamped node and, once the window reaches the root (at
@@ -299,9 +312,10 @@ def test_the_release_window_holds_the_coil_its_wave_lifts():
     assert lift - start > coiling.window.behind + coiling.move  # more than the coiling's held
     assert deployment.window()[1] == pytest.approx(deployment.config.tape.L)
     (settled,) = deployment.placed_settling
-    # the shell's quadratic interpolation between sections placed exactly at its nodes, on
-    # coarse elements that span about a radian of the hub (measured 0.68 h)
-    assert settled["converged"] and 0 < settled["iterations"] and settled["moved"] < h
+    # the tape at rest settles whole: the shell's quadratic interpolation between sections
+    # placed exactly at its nodes, on coarse elements that span about a radian of the hub, and
+    # the free part placed from the arc beam (measured 1.45 h in all)
+    assert settled["converged"] and 0 < settled["iterations"] and settled["moved"] < 2 * h
     assert deployment.run() == "t_end"
     assert deployment.time == pytest.approx(0.002)
     assert deployment.lift_off()["beam_gap"] < h

@@ -455,9 +455,7 @@ def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
     there: the shell's quadratic interpolation between sections placed exactly at its nodes
     strains it (on a coil, where an element spans a third of a radian of the hub on the default
     mesh and a radian on the coarse one). In a static solve the next step removes it; in time it
-    would be released as a spurious vibration. Returns the strain energy [J] of the window before
-    and after, the largest displacement [m] and the Newton iterations (collective); on a failed
-    solve the placed state is kept and ``converged`` is False."""
+    would be released as a spurious vibration. Returns :func:`settle`'s figures."""
     shell = hybrid.shell
     model = shell.model
     nodes = Nodes(model)
@@ -471,7 +469,32 @@ def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
         free |= (x > old_start - tol) & (x < old_start + reach)
     if old_end < end - tol:
         free |= (x < old_end + tol) & (x > old_end - reach)
-    free &= (x > start + tol) & (x < end - tol)
+    return settle(hybrid, free, config)
+
+
+def settle_at_rest(hybrid, config) -> dict:
+    """Settle every section of ``hybrid``'s shell but its window's two end edges (each tied to
+    the beam, held to the hub or holding the free end where the guide left it): one static solve
+    of the shell's energy, the beam held. For a tape at rest whose window has grown (a release):
+    the sections placed from the beam strain the shell, and their settling moves the whole free
+    part beyond the lift-off, which a band beside them alone cannot follow. Returns
+    :func:`settle`'s figures."""
+    return settle(hybrid, np.ones(Nodes(hybrid.shell.model).xi.shape[1], dtype=bool), config)
+
+
+def settle(hybrid, free: np.ndarray, config) -> dict:
+    """One static solve of ``hybrid``'s shell's energy for the dofs of its nodes where ``free``
+    (a mask of :class:`~tapecoil.models.nodes.Nodes`), but for the window's end edges; every other
+    dof held where it is. Returns the strain energy [J] of the window before and after, the
+    largest displacement [m] and the Newton iterations (collective); on a failed solve the
+    state is kept and ``converged`` is False."""
+    shell = hybrid.shell
+    model = shell.model
+    nodes = Nodes(model)
+    (start, end), _ = shell.surface.xi_range
+    x = nodes.xi[0]
+    tol = 1e-9 * (1.0 + abs(end))
+    free = free & (x > start + tol) & (x < end - tol)
     strain = dolfinx.fem.form(model.strain_energy)
     before = global_scalar(strain, shell.comm)
     if shell.comm.allreduce(int(free.sum())) == 0:

@@ -8,7 +8,8 @@ from where it starts or, if that holds less, from ``window_release`` of coil beh
 lift-off (a coil shorter than that keeps the coiling's window): the release sends a wave of lift
 down the coil, which the flattened beam behind the window cannot follow. The free end is let
 go, the state carried over
-(:func:`~tapecoil.models.window.carry_over`), and the end is held by the full shell's release
+(:func:`~tapecoil.models.window.carry_over`), a grown window settled whole at rest
+(:func:`~tapecoil.models.window.settle_at_rest`), and the end is held by the full shell's release
 hold (:class:`~tapecoil.phases.release.EndHold`: a spring to the stowed end and the dead
 forces that held it there, let go over ``deployment.release_time``). The hub is held at its
 stowed angle; the root stays clamped to it; with ``deployment.gravity`` the shell and the beam
@@ -69,7 +70,7 @@ from tapecoil.core.stepping import Continuation, ContinuationError
 from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.nodes import Nodes
-from tapecoil.models.window import carry_motion, carry_over, settle_placed
+from tapecoil.models.window import carry_motion, carry_over, settle_at_rest, settle_placed
 from tapecoil.phases.deployment_forms import director_rates
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.hybrid_motion import HybridMotion
@@ -180,8 +181,8 @@ class HybridDeployment:
         # the flattened beam's largest gap to its turn behind the window [m] and where [m]
         self.beam_gap = (0.0, 0.0)
         self.records: list[DeploymentRecord] = []
-        # the release's and each move's settling of the sections placed from the beam
-        # (settle_placed's figures)
+        # the release's settling of a grown window and each move's of the sections placed
+        # from the beam (window.settle's figures)
         self.placed_settling: list[dict] = []
         self.moves: list[tuple[float, float, float]] = []
         old = coiling.hybrid
@@ -191,13 +192,16 @@ class HybridDeployment:
         lift = self._coiled(old)[-1]
         element = coiling.element
         wanted = element * math.floor((lift - cfg.model.window_release) / element + 1e-9)
-        old_start = old.shell.surface.xi_range[0][0]
+        old_start, old_end = old.shell.surface.xi_range[0]
         start = min(old_start, wanted) if wanted > 0 else old_start
         self.hybrid = coiling.build(start, self._name(), released=True, end=tp.L)
         carry_over(old, self.hybrid)
         coiling.carry_winding(old, self.hybrid)
-        if start < old_start:  # the coil at rest: its placed sections settle as in a move
-            self.placed_settling.append(settle_placed(self.hybrid, (old_start, tp.L), cfg))
+        if start < old_start or old_end < tp.L:
+            # the tape at rest, its end where the guide held it: the window grown on the coil
+            # and towards the free end settles whole, so that the release starts from rest and
+            # the hold's dead forces are what holds the end there
+            self.placed_settling.append(settle_at_rest(self.hybrid, cfg))
             self._check_settled(self.placed_settling[-1])
         self.hold = None
         self.motion = self._motion(self.hybrid, release=True)
