@@ -11,7 +11,8 @@ from test_hybrid_coiling import coarse, coiled  # the coarse benchmark coiled to
 from tapecoil.config import Config
 from tapecoil.core.dofs import owned_constrained_dofs
 from tapecoil.models.nodes import Nodes, angles_of
-from tapecoil.models.window import carry_motion, carry_over
+from tapecoil.models.window import carry_over
+from tapecoil.models.window_motion import carry_motion
 from tapecoil.phases.hybrid_coiling import HybridCoiling
 
 # a rigid spin about an oblique axis through a point off the tape [rad/s], [m]
@@ -205,7 +206,7 @@ def test_the_hybrids_root_loads_balance_the_tapes_momenta():
     The energy account takes gravity's work: no energy is created until the window moves (the
     move adds the strain of the sections it places: docs/hybrid.md). (Before the old window's
     edge was settled at a move, the window's root rang after it with forces of 500 N: see
-    tapecoil.models.window.)"""
+    tapecoil.models.window_settling.)"""
     import dolfinx
 
     from tapecoil.core.dofs import global_scalar

@@ -35,34 +35,22 @@ deformation beyond the beam's shape is dropped where shell becomes beam, and the
 interpolation error of a turned arc is added where beam becomes shell: the energy is conserved
 where the section has the beam's shape (docs/hybrid.md gives the measured figures).
 
-:func:`settle_placed` then lets the sections placed from the beam, the old window's edge and
-the old shell's element beside it find the shell's own equilibrium among their neighbours, where
-a motion in time would release that difference as a vibration.
+The rates of a moving tape are carried over by :func:`~tapecoil.models.window_motion.carry_motion`,
+and the sections a move placed settle by :mod:`~tapecoil.models.window_settling`.
 """
 
 from __future__ import annotations
 
 from types import SimpleNamespace
 
-import dolfinx
 import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
-from tapecoil.core.dofs import global_scalar
-from tapecoil.core.newton import SNESSolver
 from tapecoil.models.interface import section_shape
 from tapecoil.models.nodes import Nodes
 
-__all__ = ["carry_motion", "carry_over", "full_shell", "settle_placed"]
-
-# settle_placed frees the old window's edge and this many of the old shell's elements beside it:
-# the old edge was held to a rigid section by its tie, and its neighbours stood in equilibrium
-# with it; the new shell's element across the edge pulls on them. Measured at the coarse 36 rad
-# deployment's last move (the window onto the root): the window root's reaction right after the
-# move was 880 N with the placed sections alone settled, 36 N with the edge too, 8 N with one
-# element beside it and 7 N with two, where the root's loads in that run are 2 to 4 N
-SETTLED_OLD_ELEMENTS = 1
+__all__ = ["carry_over", "full_shell"]
 
 # the curvature of a fitted frame field by a central difference over this share of an element
 DIFFERENCE_STEP = 1e-3
@@ -380,160 +368,3 @@ def carry_over(old, new) -> None:
             tie.copy_shape(kept)
         else:
             tie.keep_shape()
-
-
-def _rotation_vectors(R: np.ndarray) -> np.ndarray:
-    """The rotation vectors (n, 3) of rotation matrices R (n, 3, 3) (all of angle below pi)."""
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_matrix(R).as_rotvec() if len(R) else np.zeros((0, 3))
-
-
-def _exp(vectors: np.ndarray) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_rotvec(vectors).as_matrix() if len(vectors) else np.zeros((0, 3, 3))
-
-
-def carry_motion(old, new, old_rates, probe: float):
-    """:func:`carry_over` of a moving tape: sets ``new``'s state from ``old``'s and returns
-    ``new``'s rates, velocities and accelerations, (shell v, shell a, beam v, beam a) as dof
-    arrays of each part's space (collective).
-
-    ``old_rates``: ``old``'s, in the same order; the shell's are those of its state (u, theta),
-    the beam's its nodes' (u', w) and (u'', w'), w the spatial angular velocity, as
-    :class:`~tapecoil.models.beam_dynamics.BeamDynamics` keeps them. The carry-over is a map from
-    the old state to the new one; the new rates are its derivatives along the old motion's path
-    over a short time t: the old state moved to q + t v + t^2/2 a (the beam's node frames turned
-    by exp(t w + t^2/2 w')), carried over at t = +-``probe`` [s] and at 0, and the central
-    differences taken (the velocity (q+ - q-)/2t, the acceleration (q+ + q- - 2 q0)/t^2; a new
-    beam node's w from the rotation vectors of its frames' turns). Where the states pass node by
-    node the rates do exactly; where a section is placed by a beam's frame or fitted to a shell's
-    section the rates are the placement's, centripetal terms included, to second order in the
-    probe.
-    """
-    shell, beam = old.shell.model, old.beam.model
-    shell_v, shell_a, beam_v, beam_a = (np.asarray(r) for r in old_rates)
-    q_shell, q_beam, frames = shell.q.x.array.copy(), beam.q.x.array.copy(), beam.node_frames.copy()
-    u_dofs, theta_dofs = beam.node_u_dofs, beam.node_theta_dofs
-    target_shell, target_beam = new.shell.model, new.beam.model
-    t_u, t_theta = target_beam.node_u_dofs, target_beam.node_theta_dofs
-    carried = []
-    for t in (probe, -probe):
-        shell.q.x.array[:] = q_shell + t * shell_v + 0.5 * t * t * shell_a
-        beam.q.x.array[:] = q_beam
-        beam.q.x.array[u_dofs] += t * beam_v[u_dofs] + 0.5 * t * t * beam_a[u_dofs]
-        beam.node_frames = _exp(t * beam_v[theta_dofs] + 0.5 * t * t * beam_a[theta_dofs]) @ frames
-        carry_over(old, new)
-        carried.append(
-            (target_shell.q.x.array.copy(), target_beam.q.x.array.copy(), target_beam.node_frames.copy())
-        )
-    shell.q.x.array[:], beam.q.x.array[:], beam.node_frames = q_shell, q_beam, frames
-    carry_over(old, new)  # last: the ties keep the shapes of the state itself
-    (s_plus, b_plus, f_plus), (s_minus, b_minus, f_minus) = carried
-    s0, b0, f0 = target_shell.q.x.array, target_beam.q.x.array, target_beam.node_frames
-    new_shell_v = (s_plus - s_minus) / (2 * probe)
-    new_shell_a = (s_plus + s_minus - 2 * s0) / probe**2
-    new_beam_v, new_beam_a = np.zeros_like(b0), np.zeros_like(b0)
-    new_beam_v[t_u] = (b_plus[t_u] - b_minus[t_u]) / (2 * probe)
-    new_beam_a[t_u] = (b_plus[t_u] + b_minus[t_u] - 2 * b0[t_u]) / probe**2
-    f0_t = np.transpose(f0, (0, 2, 1))
-    turn_plus, turn_minus = _rotation_vectors(f_plus @ f0_t), _rotation_vectors(f_minus @ f0_t)
-    new_beam_v[t_theta] = (turn_plus - turn_minus) / (2 * probe)
-    new_beam_a[t_theta] = (turn_plus + turn_minus) / probe**2
-    return new_shell_v, new_shell_a, new_beam_v, new_beam_a
-
-
-def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
-    """Settle the sections of ``hybrid``'s shell that a window move placed from the old beam
-    (those outside ``old_window`` (start, end) [m], but for the tie's edge), the old window's
-    edges and the old shell's SETTLED_OLD_ELEMENTS elements beside them (the edge was held to a
-    rigid section by its tie): one static solve of the shell's energy for their dofs, every
-    other dof held where the carry-over put it.
-
-    A beam's section placed rigidly at the shell's nodes is not the shell's own equilibrium
-    there: the shell's quadratic interpolation between sections placed exactly at its nodes
-    strains it (on a coil, where an element spans a third of a radian of the hub on the default
-    mesh and a radian on the coarse one). In a static solve the next step removes it; in time it
-    would be released as a spurious vibration. Returns :func:`settle`'s figures."""
-    shell = hybrid.shell
-    model = shell.model
-    nodes = Nodes(model)
-    (start, end), _ = shell.surface.xi_range
-    x = nodes.xi[0]
-    tol = 1e-9 * (1.0 + abs(end))
-    old_start, old_end = old_window
-    free = (x < old_start - tol) | (x > old_end + tol)
-    reach = SETTLED_OLD_ELEMENTS * shell.element_length + tol
-    if start + tol < old_start:  # the old start edge is inside the new window
-        free |= (x > old_start - tol) & (x < old_start + reach)
-    if old_end < end - tol:
-        free |= (x < old_end + tol) & (x > old_end - reach)
-    return settle(hybrid, free, config)
-
-
-def settle_at_rest(hybrid, config) -> dict:
-    """Settle every section of ``hybrid``'s shell but its window's two end edges (each tied to
-    the beam, held to the hub or holding the free end where the guide left it): one static solve
-    of the shell's energy, the beam held. For a tape at rest whose window has grown (a release):
-    the sections placed from the beam strain the shell, and their settling moves the whole free
-    part beyond the lift-off, which a band beside them alone cannot follow. Returns
-    :func:`settle`'s figures."""
-    return settle(hybrid, np.ones(Nodes(hybrid.shell.model).xi.shape[1], dtype=bool), config)
-
-
-def settle(hybrid, free: np.ndarray, config) -> dict:
-    """One static solve of ``hybrid``'s shell's energy for the dofs of its nodes where ``free``
-    (a mask of :class:`~tapecoil.models.nodes.Nodes`), but for the window's end edges; every other
-    dof held where it is. Returns the strain energy [J] of the window before and after, the
-    largest displacement [m] and the Newton iterations (collective); on a failed solve the
-    state is kept and ``converged`` is False."""
-    shell = hybrid.shell
-    model = shell.model
-    nodes = Nodes(model)
-    (start, end), _ = shell.surface.xi_range
-    x = nodes.xi[0]
-    tol = 1e-9 * (1.0 + abs(end))
-    free = free & (x > start + tol) & (x < end - tol)
-    strain = dolfinx.fem.form(model.strain_energy)
-    before = global_scalar(strain, shell.comm)
-    if shell.comm.allreduce(int(free.sum())) == 0:
-        return {
-            "strain_energy_placed": before,
-            "strain_energy_settled": before,
-            "moved": 0.0,
-            "iterations": 0,
-            "converged": True,
-        }
-    free_dofs = np.concatenate([nodes.u_dofs[free].ravel(), nodes.theta_dofs[free].ravel()])
-    size = len(model.q.x.array)
-    held = np.setdiff1d(np.arange(size, dtype=np.int32), free_dofs).astype(np.int32)
-    placed = dolfinx.fem.Function(model.W)
-    placed.x.array[:] = model.q.x.array
-    hold = dolfinx.fem.dirichletbc(placed, held)
-    F, J = shell.forms()
-    solver = SNESSolver.from_config(
-        F,
-        J,
-        model.q,
-        [*shell.bcs, hold],
-        config.solver,
-        prefix=f"{shell.name}_placed_",
-        # an energy's minimum from a strained placement: a full Newton step can overshoot it
-        defaults={"pc_type": "cholesky", "snes_linesearch_type": "bt"},
-        state_scale=model.rounding_scale(),
-    )
-    result = solver.solve()
-    if not result.converged:
-        model.q.x.array[:] = placed.x.array
-    model.q.x.scatter_forward()
-    solver.destroy()
-    change = model.q.x.array - placed.x.array
-    moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
-    return {
-        "strain_energy_placed": before,
-        "strain_energy_settled": global_scalar(strain, shell.comm),
-        "moved": shell.comm.allreduce(moved, op=MPI.MAX),
-        "iterations": int(result.iterations),
-        "converged": bool(result.converged),
-    }

@@ -9,7 +9,7 @@ lift-off (a coil shorter than that keeps the coiling's window): the release send
 down the coil, which the flattened beam behind the window cannot follow. The free end is let
 go, the state carried over
 (:func:`~tapecoil.models.window.carry_over`), a grown window settled whole at rest
-(:func:`~tapecoil.models.window.settle_at_rest`), and the end is held by the full shell's release
+(:func:`~tapecoil.models.window_settling.settle_at_rest`), and the end is held by the full shell's release
 hold (:class:`~tapecoil.phases.release.EndHold`: a spring to the stowed end and the dead
 forces that held it there, let go over ``deployment.release_time``). The hub is held at its
 stowed angle; the root stays clamped to it; with ``deployment.gravity`` the shell and the beam
@@ -32,10 +32,10 @@ along the tape: a new hybrid is built whose window, of its own length, starts ``
 window_move`` behind the lift-off (so that the shell always holds at least ``window_behind`` of
 the coil behind the lift-off, and at least ``window_ahead - window_move`` of tape beyond it, as
 in coiling, where the lift-off travels the other way), and the state and the rates (velocities and
-accelerations) are carried over by :func:`~tapecoil.models.window.carry_motion`; shell becomes
+accelerations) are carried over by :func:`~tapecoil.models.window_motion.carry_motion`; shell becomes
 beam ahead of the ploy region, towards the free end, and beam becomes shell on the coil. The
 sections placed into shell from the flattened beam are then settled
-(:func:`~tapecoil.models.window.settle_placed`).
+(:func:`~tapecoil.models.window_settling.settle_placed`).
 
 The deployed fraction is the full shell's measure (:func:`~tapecoil.measures.deployment.coiled_length`)
 read on the hybrid's centre line: the beam's line and the window's middle line, their inner face
@@ -70,7 +70,9 @@ from tapecoil.core.stepping import Continuation, ContinuationError
 from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.nodes import Nodes
-from tapecoil.models.window import carry_motion, carry_over, settle_at_rest, settle_placed
+from tapecoil.models.window import carry_over
+from tapecoil.models.window_motion import carry_motion
+from tapecoil.models.window_settling import settle_at_rest, settle_placed
 from tapecoil.phases.deployment_forms import director_rates
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.hybrid_motion import HybridMotion
@@ -182,7 +184,7 @@ class HybridDeployment:
         self.beam_gap = (0.0, 0.0)
         self.records: list[DeploymentRecord] = []
         # the release's settling of a grown window and each move's of the sections placed
-        # from the beam (window.settle's figures)
+        # from the beam (window_settling.settle's figures)
         self.placed_settling: list[dict] = []
         self.moves: list[tuple[float, float, float]] = []
         old = coiling.hybrid

@@ -1,0 +1,122 @@
+"""The shell's sections that a window move placed from the beam, settled on the shell.
+
+A beam's section placed rigidly at the shell's nodes (:func:`~tapecoil.models.window.carry_over`)
+is not the shell's own equilibrium there. :func:`settle_placed` lets the sections a move placed,
+the old window's edge and the old shell's element beside it find it among their neighbours,
+where a motion in time would release that difference as a vibration; :func:`settle_at_rest`
+settles a whole window of a tape at rest (a release). Both are one static solve of
+:func:`settle`.
+"""
+
+from __future__ import annotations
+
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+
+from tapecoil.core.dofs import global_scalar
+from tapecoil.core.newton import SNESSolver
+from tapecoil.models.nodes import Nodes
+
+__all__ = ["settle", "settle_at_rest", "settle_placed"]
+
+# settle_placed frees the old window's edge and this many of the old shell's elements beside it:
+# the old edge was held to a rigid section by its tie, and its neighbours stood in equilibrium
+# with it; the new shell's element across the edge pulls on them (docs/hybrid.md, "The placed
+# sections settled", has the root's reaction after a move with the edge, one and two elements)
+SETTLED_OLD_ELEMENTS = 1
+
+
+def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
+    """Settle the sections of ``hybrid``'s shell that a window move placed from the old beam
+    (those outside ``old_window`` (start, end) [m], but for the tie's edge), the old window's
+    edges and the old shell's SETTLED_OLD_ELEMENTS elements beside them (the edge was held to a
+    rigid section by its tie): one static solve of the shell's energy for their dofs, every
+    other dof held where the carry-over put it.
+
+    A beam's section placed rigidly at the shell's nodes is not the shell's own equilibrium
+    there: the shell's quadratic interpolation between sections placed exactly at its nodes
+    strains it (on a coil, where an element spans a third of a radian of the hub on the default
+    mesh and a radian on the coarse one). In a static solve the next step removes it; in time it
+    would be released as a spurious vibration. Returns :func:`settle`'s figures."""
+    shell = hybrid.shell
+    model = shell.model
+    nodes = Nodes(model)
+    (start, end), _ = shell.surface.xi_range
+    x = nodes.xi[0]
+    tol = 1e-9 * (1.0 + abs(end))
+    old_start, old_end = old_window
+    free = (x < old_start - tol) | (x > old_end + tol)
+    reach = SETTLED_OLD_ELEMENTS * shell.element_length + tol
+    if start + tol < old_start:  # the old start edge is inside the new window
+        free |= (x > old_start - tol) & (x < old_start + reach)
+    if old_end < end - tol:
+        free |= (x < old_end + tol) & (x > old_end - reach)
+    return settle(hybrid, free, config)
+
+
+def settle_at_rest(hybrid, config) -> dict:
+    """Settle every section of ``hybrid``'s shell but its window's two end edges (each tied to
+    the beam, held to the hub or holding the free end where the guide left it): one static solve
+    of the shell's energy, the beam held. For a tape at rest whose window has grown (a release):
+    the sections placed from the beam strain the shell, and their settling moves the whole free
+    part beyond the lift-off, which a band beside them alone cannot follow. Returns
+    :func:`settle`'s figures."""
+    return settle(hybrid, np.ones(Nodes(hybrid.shell.model).xi.shape[1], dtype=bool), config)
+
+
+def settle(hybrid, free: np.ndarray, config) -> dict:
+    """One static solve of ``hybrid``'s shell's energy for the dofs of its nodes where ``free``
+    (a mask of :class:`~tapecoil.models.nodes.Nodes`), but for the window's end edges; every other
+    dof held where it is. Returns the strain energy [J] of the window before and after, the
+    largest displacement [m] and the Newton iterations (collective); on a failed solve the
+    state is kept and ``converged`` is False."""
+    shell = hybrid.shell
+    model = shell.model
+    nodes = Nodes(model)
+    (start, end), _ = shell.surface.xi_range
+    x = nodes.xi[0]
+    tol = 1e-9 * (1.0 + abs(end))
+    free = free & (x > start + tol) & (x < end - tol)
+    strain = dolfinx.fem.form(model.strain_energy)
+    before = global_scalar(strain, shell.comm)
+    if shell.comm.allreduce(int(free.sum())) == 0:
+        return {
+            "strain_energy_placed": before,
+            "strain_energy_settled": before,
+            "moved": 0.0,
+            "iterations": 0,
+            "converged": True,
+        }
+    free_dofs = np.concatenate([nodes.u_dofs[free].ravel(), nodes.theta_dofs[free].ravel()])
+    size = len(model.q.x.array)
+    held = np.setdiff1d(np.arange(size, dtype=np.int32), free_dofs).astype(np.int32)
+    placed = dolfinx.fem.Function(model.W)
+    placed.x.array[:] = model.q.x.array
+    hold = dolfinx.fem.dirichletbc(placed, held)
+    F, J = shell.forms()
+    solver = SNESSolver.from_config(
+        F,
+        J,
+        model.q,
+        [*shell.bcs, hold],
+        config.solver,
+        prefix=f"{shell.name}_placed_",
+        # an energy's minimum from a strained placement: a full Newton step can overshoot it
+        defaults={"pc_type": "cholesky", "snes_linesearch_type": "bt"},
+        state_scale=model.rounding_scale(),
+    )
+    result = solver.solve()
+    if not result.converged:
+        model.q.x.array[:] = placed.x.array
+    model.q.x.scatter_forward()
+    solver.destroy()
+    change = model.q.x.array - placed.x.array
+    moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
+    return {
+        "strain_energy_placed": before,
+        "strain_energy_settled": global_scalar(strain, shell.comm),
+        "moved": shell.comm.allreduce(moved, op=MPI.MAX),
+        "iterations": int(result.iterations),
+        "converged": bool(result.converged),
+    }
