@@ -144,6 +144,25 @@ def test_two_ranks_coil_the_hybrid_as_one():
     assert abs(s2 - s1) < 1e-9 * 0.5
 
 
+def test_a_hybrid_run_refuses_a_coil_its_window_never_leaves(tmp_path):
+    """The coarse tape coiled 2 rad (0.026 m of coil at most) and deployed by the hybrid: its
+    window would never leave the root and hold the whole tape at release, so the run is refused
+    before anything is computed, naming the keys; coiling alone runs. 4.5 rad passes the check
+    (the window leaves the root at 4.5 rad: the run test below)."""
+    from tapecoil.app.pipeline import run
+    from tapecoil.config import ConfigError
+    from tapecoil.config.model import hybrid_deployment_need
+
+    config = coarse(2.0)
+    config = dataclasses.replace(config, model=dataclasses.replace(config.model, kind="hybrid"))
+    with pytest.raises(
+        ConfigError, match=r"coiling.hub_angle = 2 rad .* model.window_behind \+ model.window_move"
+    ):
+        run(config, tmp_path / "run", progress=False)
+    assert not (tmp_path / "run").exists()
+    assert hybrid_deployment_need(dataclasses.replace(config, coiling=coarse(4.5).coiling)) is None
+
+
 def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path):
     """A run with ``model.kind = "hybrid"`` (coarse, 4.5 rad: the window leaves the root once;
     2 ms of deployment): the coiling's summary names its measures as the shell's does, the

@@ -169,6 +169,18 @@ def test_a_coiled_tape_deploys_only_as_it_was_coiled():
         HybridDeployment(coiling, thicker)
 
 
+def test_a_coil_the_window_never_left_is_not_deployed_by_the_hybrid():
+    """The coarse tape coiled 3.5 rad by the hybrid (0.045 m, shorter than window_behind +
+    window_move = 0.05 m): its window is still at the root, and at release it would hold the
+    whole tape; the deployment refuses before building anything, saying why."""
+    from tapecoil.phases.hybrid_deployment import HybridDeployment
+
+    coiling = coiled(MPI.COMM_WORLD, 3.5)
+    assert coiling.hybrid.shell.surface.xi_range[0][0] == 0.0
+    with pytest.raises(ValueError, match=r"coiled length, 0.04\d* m, is shorter than"):
+        HybridDeployment(coiling)
+
+
 def test_the_release_starts_from_rest():
     """The coarse 4.5 rad coil, whose window grows at release from the coiling's (to 0.25 m) to
     the free end, held for the first millisecond of the release: the tape stays at rest, its

@@ -42,6 +42,8 @@ def run(
     ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
     ``output.report``; rank 0, after the computation).
     """
+    from tapecoil.config.model import hybrid_deployment_need
+    from tapecoil.config.params import ConfigError
     from tapecoil.phases.coiling_run import run_coiling
     from tapecoil.phases.deployment_run import run_deployment
     from tapecoil.phases.hybrid_coiling_run import coil_again, run_hybrid_coiling
@@ -56,6 +58,10 @@ def run(
             "model.kind = 'hybrid' deploys the tape its own coiling left, in the same run: run "
             "both phases (tapecoil run), or set model.kind = 'shell' to deploy a stowed checkpoint"
         )
+    if hybrid and "deployment" in phases:
+        need = hybrid_deployment_need(config)
+        if need is not None:
+            raise ConfigError(need)
     started = time.perf_counter()
     directory = results.prepare_directory(directory, config, comm)
     own_stowed, own_deployed = directory / "stowed", directory / "deployed"

@@ -4,6 +4,7 @@ tables."""
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 from tapecoil.config.params import POSITIVE, ConfigError, param
@@ -109,3 +110,23 @@ def hybrid_need(config) -> str | None:
         ),
     )
     return next((f"{setting}: {why}" for ok, setting, why in needs if not ok), None)
+
+
+def hybrid_deployment_need(config) -> str | None:
+    """Why the hybrid cannot deploy the tape of ``config`` as it coils it, or None. Its window
+    leaves the root only once the coil is ``window_behind + window_move`` long, and at release
+    it reaches the free end: where even the longest coil that ``coiling.hub_angle`` can wind
+    (each turn a thickness further out than the hub) is shorter, the window holds the whole
+    tape at release and nothing of it is beam."""
+    tp, model = config.tape, config.model
+    angle = config.coiling.hub_angle
+    longest = angle * (config.hub.radius + tp.h * (1.0 + angle / (2.0 * math.pi)))
+    least = model.window_behind + model.window_move
+    if longest >= least:
+        return None
+    return (
+        f"coiling.hub_angle = {angle:g} rad winds at most {longest:.4g} m of coil, less than the "
+        f"model.window_behind + model.window_move = {least:g} m after which the hybrid's window "
+        "leaves the root: at release the window would hold the whole tape, nothing of it beam. "
+        "Coil further, or deploy this tape with model.kind = 'shell'"
+    )

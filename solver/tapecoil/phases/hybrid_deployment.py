@@ -196,6 +196,13 @@ class HybridDeployment:
         wanted = element * math.floor((lift - cfg.model.window_release) / element + 1e-9)
         old_start, old_end = old.shell.surface.xi_range[0]
         start = min(old_start, wanted) if wanted > 0 else old_start
+        if start <= 0.0:
+            raise ValueError(
+                f"the hybrid cannot deploy this coil: its coiled length, {lift:.4g} m, is shorter "
+                f"than model.window_behind + model.window_move = {coiling.window.behind + coiling.move:g} m, "
+                "so its window never left the root and would hold the whole tape at release, "
+                "nothing of it beam; coil further, or deploy it with model.kind = 'shell'"
+            )
         self.hybrid = coiling.build(start, self._name(), released=True, end=tp.L)
         carry_over(old, self.hybrid)
         coiling.carry_winding(old, self.hybrid)
