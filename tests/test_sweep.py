@@ -113,6 +113,11 @@ WRAPPING = '[sweep]\nstudy = "wrapping"\n[sweep.parameters]\n"tape.h" = [1e-4]\n
             '[sweep]\n[sweep.parameters]\n"tape.h" = [1e-4]\n[sweep.tension]\nsection_window = [1.0, 6.0]\n',
             r"sweep\.tension: section_window = \[1\.0, 6\.0\]",
         ),
+        (  # the hybrid cannot deploy a coil its window never left: refused before the 36 rad case
+            '[model]\nkind = "hybrid"\n[sweep]\nstudy = "run"\n[sweep.parameters]\n'
+            '"coiling.hub_angle" = [36.0, 2.0]\n',
+            r"sweep case \{'coiling.hub_angle': 2.0\}: coiling.hub_angle = 2 rad winds at most",
+        ),
     ],
 )
 def test_a_bad_sweep_is_refused_before_anything_runs(tmp_path, text, message):

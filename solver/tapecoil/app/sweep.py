@@ -46,6 +46,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from tapecoil.config import Config, ConfigError, config_from_dict
+from tapecoil.config.model import hybrid_deployment_need
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -161,7 +162,10 @@ def load_sweep(path: str | Path) -> Sweep:
         sweep.study_options().check()
     config_from_dict(json.loads(json.dumps(data)))  # the base case itself
     for case in sweep.cases():
-        sweep.config(case)
+        config = sweep.config(case)
+        need = hybrid_deployment_need(config) if study == "run" and config.model.kind == "hybrid" else None
+        if need is not None:  # the run deploys: refused here, not after the cases before it
+            raise ConfigError(f"sweep case {case}: {need}")
     return sweep
 
 
