@@ -39,20 +39,18 @@ def settle_placed(hybrid, old_window: tuple[float, float], config) -> dict:
     strains it (on a coil, where an element spans a third of a radian of the hub on the default
     mesh and a radian on the coarse one). In a static solve the next step removes it; in time it
     would be released as a spurious vibration. Returns :func:`settle`'s figures."""
-    shell = hybrid.shell
-    model = shell.model
-    nodes = Nodes(model)
-    (start, end), _ = shell.surface.xi_range
-    x = nodes.xi[0]
-    tol = 1e-9 * (1.0 + abs(end))
     old_start, old_end = old_window
-    free = (x < old_start - tol) | (x > old_end + tol)
-    reach = SETTLED_OLD_ELEMENTS * shell.element_length + tol
-    if start + tol < old_start:  # the old start edge is inside the new window
-        free |= (x > old_start - tol) & (x < old_start + reach)
-    if old_end < end - tol:
-        free |= (x < old_end + tol) & (x > old_end - reach)
-    return settle(hybrid, free, config)
+    reach = SETTLED_OLD_ELEMENTS * hybrid.shell.element_length
+
+    def placed(x, start, end, tol):
+        free = (x < old_start - tol) | (x > old_end + tol)
+        if start + tol < old_start:  # the old start edge is inside the new window
+            free |= (x > old_start - tol) & (x < old_start + reach + tol)
+        if old_end < end - tol:
+            free |= (x < old_end + tol) & (x > old_end - reach - tol)
+        return free
+
+    return settle(hybrid, placed, config)
 
 
 def settle_at_rest(hybrid, config) -> dict:
@@ -62,22 +60,23 @@ def settle_at_rest(hybrid, config) -> dict:
     the sections placed from the beam strain the shell, and their settling moves the whole free
     part beyond the lift-off, which a band beside them alone cannot follow. Returns
     :func:`settle`'s figures."""
-    return settle(hybrid, np.ones(Nodes(hybrid.shell.model).xi.shape[1], dtype=bool), config)
+    return settle(hybrid, lambda x, start, end, tol: np.ones(x.shape, dtype=bool), config)
 
 
-def settle(hybrid, free: np.ndarray, config) -> dict:
-    """One static solve of ``hybrid``'s shell's energy for the dofs of its nodes where ``free``
-    (a mask of :class:`~tapecoil.models.nodes.Nodes`), but for the window's end edges; every other
-    dof held where it is. Returns the strain energy [J] of the window before and after, the
-    largest displacement [m] and the Newton iterations (collective); on a failed solve the
-    state is kept and ``converged`` is False."""
+def settle(hybrid, choose, config) -> dict:
+    """One static solve of ``hybrid``'s shell's energy for the dofs of the nodes that
+    ``choose(x, start, end, tol)`` marks (a mask over the nodes' places x along the tape [m], the
+    window (start, end) [m] and a tolerance [m]), but for the window's end edges; every other dof
+    held where it is. Returns the strain energy [J] of the window before and after, the largest
+    displacement [m] and the Newton iterations (collective); on a failed solve the state is kept
+    and ``converged`` is False."""
     shell = hybrid.shell
     model = shell.model
     nodes = Nodes(model)
     (start, end), _ = shell.surface.xi_range
     x = nodes.xi[0]
     tol = 1e-9 * (1.0 + abs(end))
-    free = free & (x > start + tol) & (x < end - tol)
+    free = choose(x, start, end, tol) & (x > start + tol) & (x < end - tol)
     strain = dolfinx.fem.form(model.strain_energy)
     before = global_scalar(strain, shell.comm)
     if shell.comm.allreduce(int(free.sum())) == 0:
