@@ -161,6 +161,7 @@ def test_a_hybrid_run_refuses_a_coil_its_window_never_leaves(tmp_path):
         run(config, tmp_path / "run", progress=False)
     assert not (tmp_path / "run").exists()
     assert hybrid_deployment_need(dataclasses.replace(config, coiling=coarse(4.5).coiling)) is None
+    assert hybrid_deployment_need(coarse(2.0)) is None  # the shell model deploys any coil
 
 
 def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path):

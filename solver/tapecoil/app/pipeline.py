@@ -58,7 +58,7 @@ def run(
             "model.kind = 'hybrid' deploys the tape its own coiling left, in the same run: run "
             "both phases (tapecoil run), or set model.kind = 'shell' to deploy a stowed checkpoint"
         )
-    if hybrid and "deployment" in phases:
+    if "deployment" in phases:
         need = hybrid_deployment_need(config)
         if need is not None:
             raise ConfigError(need)

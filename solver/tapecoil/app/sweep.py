@@ -163,7 +163,7 @@ def load_sweep(path: str | Path) -> Sweep:
     config_from_dict(json.loads(json.dumps(data)))  # the base case itself
     for case in sweep.cases():
         config = sweep.config(case)
-        need = hybrid_deployment_need(config) if study == "run" and config.model.kind == "hybrid" else None
+        need = hybrid_deployment_need(config) if study == "run" else None
         if need is not None:  # the run deploys: refused here, not after the cases before it
             raise ConfigError(f"sweep case {case}: {need}")
     return sweep

@@ -113,12 +113,14 @@ def hybrid_need(config) -> str | None:
 
 
 def hybrid_deployment_need(config) -> str | None:
-    """Why the hybrid cannot deploy the tape of ``config`` as it coils it, or None. Its window
-    leaves the root only once the coil is ``window_behind + window_move`` long, and at release
-    it reaches the free end: where even the longest coil that ``coiling.hub_angle`` can wind
-    (each turn a thickness further out than the hub) is shorter, the window holds the whole
-    tape at release and nothing of it is beam."""
+    """Why the hybrid cannot deploy the tape of ``config`` as it coils it, or None (also for the
+    shell model). Its window leaves the root only once the coil is ``window_behind +
+    window_move`` long, and at release it reaches the free end: where even the longest coil that
+    ``coiling.hub_angle`` can wind (each turn a thickness further out than the hub) is shorter,
+    the window holds the whole tape at release and nothing of it is beam."""
     tp, model = config.tape, config.model
+    if model.kind != "hybrid":
+        return None
     angle = config.coiling.hub_angle
     longest = angle * (config.hub.radius + tp.h * (1.0 + angle / (2.0 * math.pi)))
     least = model.window_behind + model.window_move
