@@ -14,6 +14,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.core import compat
+from tapecoil.core.expression import expression_at
 
 
 def owned_size(V) -> int:
@@ -123,6 +124,6 @@ def cell_midpoint_values(mesh, expressions):
     points = compat.interpolation_points(V0)
     for expr in expressions:
         f = dolfinx.fem.Function(V0)
-        f.interpolate(dolfinx.fem.Expression(expr, points))
+        f.interpolate(expression_at(expr, points))
         columns.append(f.x.array[:n_owned].copy())
     return V0, np.column_stack(columns)

@@ -19,6 +19,7 @@ import numpy as np
 
 from tapecoil.core import compat
 from tapecoil.core.collective import raise_everywhere
+from tapecoil.core.expression import expression_at
 
 
 class NonFiniteStateError(RuntimeError):
@@ -63,7 +64,7 @@ class ShellWriter:
             ("kappa_trans", V1, ky),
         ):
             f = dolfinx.fem.Function(space, name=name)
-            self.fields.append((f, dolfinx.fem.Expression(expr, points)))
+            self.fields.append((f, expression_at(expr, points)))
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         self.writer = dolfinx.io.VTXWriter(mesh.comm, str(path), [f for f, _ in self.fields], engine="BP4")
         self.snapshots = None if snapshots is None else Path(snapshots)

@@ -48,6 +48,7 @@ from mpi4py import MPI
 
 from tapecoil.core import compat
 from tapecoil.core.dofs import global_scalar
+from tapecoil.core.expression import expression_at
 from tapecoil.core.rotation import rotation_matrices
 from tapecoil.models.beam_section import BeamSection
 
@@ -180,7 +181,7 @@ class GeometricallyExactBeam:
         extent = np.ptp(mesh.geometry.x, axis=0).max() if len(mesh.geometry.x) else 0.0
         size = mesh.comm.allreduce(extent, op=MPI.MAX)
         points = compat.interpolation_points(self.frame_n.function_space)
-        x = self._at_points(dolfinx.fem.Expression(ufl.SpatialCoordinate(mesh), points)).reshape(-1, 3).T
+        x = self._at_points(expression_at(ufl.SpatialCoordinate(mesh), points)).reshape(-1, 3).T
         F0, K0 = _frames_with_curvature(frame, x, 1e-6 * size)
         _store(self.frame_n, F0)
         _store(self.frame_0, F0)
@@ -189,7 +190,7 @@ class GeometricallyExactBeam:
         J = ufl.Jacobian(mesh)
         tangent = ufl.as_vector([J[i, 0] for i in range(3)])
         self.tangent = tangent / ufl.sqrt(ufl.dot(tangent, tangent))
-        self.strain_0.interpolate(dolfinx.fem.Expression(self.frame_n.T * self.tangent, points))
+        self.strain_0.interpolate(expression_at(self.frame_n.T * self.tangent, points))
 
         self.u, self.theta = ufl.split(self.q)
         R = rotation(self.theta)
@@ -219,8 +220,8 @@ class GeometricallyExactBeam:
             0.5 * ufl.dot(self.strain, C_N * self.strain) + 0.5 * ufl.dot(bend, C_M * bend) + c[9] - relief
         )
         self.energy = self.energy_density * self.dx  # the solver differentiates it with its terms
-        self._next_frame = dolfinx.fem.Expression(self.frame, points)
-        self._next_curvature = dolfinx.fem.Expression(self.curvature, points)
+        self._next_frame = expression_at(self.frame, points)
+        self._next_curvature = expression_at(self.curvature, points)
         _, theta_map = compat.collapse(self.W.sub(1))
         self._theta_dofs = theta_map
         # the nodes (local and ghost): reference points, the dofs of u and theta at each, and the
@@ -273,7 +274,7 @@ class GeometricallyExactBeam:
         fields["curvature_n"] = (self.curvature_n, 3)
         expression, size = fields[name]
         points = compat.interpolation_points(self.frame_n.function_space)
-        return self._at_points(dolfinx.fem.Expression(expression, points)).reshape(-1, size)
+        return self._at_points(expression_at(expression, points)).reshape(-1, size)
 
     def set_quadrature_values(self, frames: np.ndarray, curvatures: np.ndarray) -> None:
         """Set the committed frames (n, 9) and curvatures (n, 3) at the quadrature points, in the

@@ -14,6 +14,7 @@ from mpi4py import MPI
 
 from tapecoil.core import compat
 from tapecoil.core.dofs import assemble_into, owned_subspace_dofs
+from tapecoil.core.expression import expression_at
 from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.rotation import rotation_matrix
 from tapecoil.core.smoothing import penetration_ufl
@@ -346,10 +347,8 @@ class BeamProblem:
         points = compat.interpolation_points(model.frame_n.function_space)
         index_map = self.mesh.topology.index_map(1)
         cells = np.arange(index_map.size_local, dtype=np.int32)
-        force = dolfinx.fem.Expression(model.section_fields[0] * model.strain[0], points).eval(
-            self.mesh, cells
-        )
-        where = dolfinx.fem.Expression(ufl.SpatialCoordinate(self.mesh), points).eval(self.mesh, cells)
+        force = expression_at(model.section_fields[0] * model.strain[0], points).eval(self.mesh, cells)
+        where = expression_at(ufl.SpatialCoordinate(self.mesh), points).eval(self.mesh, cells)
         comm = self.mesh.comm
         x = np.concatenate(comm.allgather(where.reshape(-1, 3)))
         N = np.concatenate(comm.allgather(force.reshape(-1)))

@@ -16,6 +16,7 @@ import ufl
 
 from tapecoil.config import TapeConfig
 from tapecoil.core import compat
+from tapecoil.core.expression import expression_at
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.models.shell import director_from_angles
 from tapecoil.phases.release import split_state
@@ -121,7 +122,7 @@ class DeploymentForms:
         _, _, _, d_old = model.kinematics(ti.q_old)
         dd = model.director_variation(ti.q_old)
         rate = 2 * (model.d - d_old) / ti.dt - self.director_rate
-        self._new_director_rate = dolfinx.fem.Expression(rate, compat.interpolation_points(space))
+        self._new_director_rate = expression_at(rate, compat.interpolation_points(space))
         du, _ = split_state(model.dq)
         a_u, _ = split_state(ti.a_m)
         inertia = self.translational * ufl.dot(a_u, du) + self.rotary * ufl.dot(

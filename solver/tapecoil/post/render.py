@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from tapecoil.core import compat
+from tapecoil.core.expression import expression_at
 from tapecoil.models.shell import NaghdiShell
 
 
@@ -31,13 +32,13 @@ def shell_grid(model: NaghdiShell, scalar=None, name: str = "field"):
     V3 = dolfinx.fem.functionspace(mesh, basix.ufl.element("Lagrange", cell, model.degree, shape=(3,)))
     points = compat.interpolation_points(V3)
     position = dolfinx.fem.Function(V3)
-    position.interpolate(dolfinx.fem.Expression(model.display_offset, points))
+    position.interpolate(expression_at(model.display_offset, points))
     topology, cell_types, geometry = dolfinx.plot.vtk_mesh(V3)
     grid = pyvista.UnstructuredGrid(topology, cell_types, geometry + position.x.array.reshape(-1, 3))
     if scalar is not None:
         V1 = dolfinx.fem.functionspace(mesh, basix.ufl.element("Lagrange", cell, model.degree))
         f = dolfinx.fem.Function(V1)
-        f.interpolate(dolfinx.fem.Expression(scalar, compat.interpolation_points(V1)))
+        f.interpolate(expression_at(scalar, compat.interpolation_points(V1)))
         grid.point_data[name] = f.x.array.copy()
     return grid
 
