@@ -334,16 +334,22 @@ def test_the_release_window_holds_the_coil_its_wave_lifts():
     assert deployment.lift_off()["beam_gap"] < h
 
 
+@pytest.mark.slow
 @pytest.mark.mpi
 def test_the_release_window_on_two_ranks():
-    """As above on 2 ranks: the lift-off read on the gathered line, the settling collective."""
+    """As above on 2 ranks: the lift-off read on the gathered line, the settling collective.
+    Slow (`make validate`): the 12 rad coil takes over a minute on 2 ranks, and the suite checks
+    the gathered lift-off and the release's settling on 2 ranks on the 4.5 rad coil
+    (test_two_ranks_deploy_the_hybrid_as_one)."""
     assert MPI.COMM_WORLD.size > 1
     test_the_release_window_holds_the_coil_its_wave_lifts()
 
 
+@pytest.mark.slow
 @pytest.mark.mpi
 def test_the_hybrid_stops_on_every_rank_where_the_coil_loosens():
-    """As above on 2 ranks: the gap is read from the gathered line, so every rank stops."""
+    """As above on 2 ranks: the gap is read from the gathered line, so every rank stops. Slow
+    (`make validate`), with the 12 rad coil it shares with the test above."""
     assert MPI.COMM_WORLD.size > 1
     test_the_hybrid_stops_where_the_coil_loosens_behind_its_window()
 
