@@ -119,3 +119,16 @@ def test_two_ranks_swing_the_cantilever_as_one():
     _, two = cantilever_vibration(MPI.COMM_WORLD, periods=1.0, per_period=40)
     _, one = cantilever_vibration(MPI.COMM_SELF, periods=1.0, per_period=40)
     assert np.abs(two - one).max() < 1e-12
+
+
+def test_a_beam_with_gravity_and_one_without_share_their_compiled_forms():
+    """Gravity enters the equations of motion as a Constant whatever its value: a run under
+    gravity (a ground test) and one in orbit compile the same residual, Jacobian and reaction
+    (a term of the residual written only under gravity gave the Jacobian, derived from it, a
+    signature of its own too)."""
+    forms = []
+    for gravity in ((0.0, 0.0, 0.0), (0.0, -9.81, 0.0)):
+        problem, _ = strip(MPI.COMM_SELF, "weighed", elements=2)
+        motion = BeamDynamics(problem, DENSITY * AREA, (1.0, 1.0, 1.0), gravity=gravity)
+        forms.append([form.signature() for form in (*motion.forms, motion.reaction_form, motion.weight_work)])
+    assert forms[0] == forms[1]

@@ -101,14 +101,14 @@ class BeamDynamics:
         ) * model.dx
         residual, _ = problem.forms()
         F = self.inertia_form + scheme.force_average(residual)
-        # the weight (constant: not averaged) and its work over a step; None without gravity
-        self.weight = self.weight_work = None
-        if any(float(c) != 0.0 for c in gravity):
-            g = ufl.as_vector([float(c) for c in gravity])
-            self.weight = self.line_density * ufl.dot(g, du) * model.dx
-            u_old = ufl.as_vector([scheme.q_old[i] for i in range(3)])
-            self.weight_work = self.line_density * ufl.dot(g, ufl.split(model.q)[0] - u_old) * model.dx
-            F = F - self.weight
+        # the weight (constant: not averaged) and its work over a step, gravity a Constant
+        # whatever its value (zero too), so that runs with and without it share compiled forms
+        self.gravity = np.asarray(gravity, dtype=float)
+        g = dolfinx.fem.Constant(model.mesh, self.gravity)
+        self.weight = self.line_density * ufl.dot(g, du) * model.dx
+        u_old = ufl.as_vector([scheme.q_old[i] for i in range(3)])
+        self.weight_work = self.line_density * ufl.dot(g, ufl.split(model.q)[0] - u_old) * model.dx
+        F = F - self.weight
         self.forms = (F, ufl.derivative(F, model.q, ufl.TrialFunction(model.W)))
         self.rtol = rtol
         self.solver = None  # the beam's own, for steps of the beam alone
@@ -129,8 +129,7 @@ class BeamDynamics:
         self.reaction_form = (
             self.line_density * ufl.dot(a_u, du) + ufl.dot(end_moment, dtheta)
         ) * model.dx + residual
-        if self.weight is not None:
-            self.reaction_form = self.reaction_form - self.weight
+        self.reaction_form = self.reaction_form - self.weight
         x = ufl.SpatialCoordinate(model.mesh) + ufl.split(model.q)[0]
         self._momenta = [dolfinx.fem.form(self.line_density * u[i] * model.dx) for i in range(3)] + [
             dolfinx.fem.form((self.line_density * ufl.cross(x, u)[i] + (inertia_now * theta)[i]) * model.dx)

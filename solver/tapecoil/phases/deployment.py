@@ -72,14 +72,14 @@ class DeploymentModel:
         # the hold on the free end (the guide and the pull of the coiling run), let go over
         # release_time (phases.release)
         self.hold = EndHold(c, ti, cfg.deployment.release_time)
-        # the loads on the tape: the hold, and gravity where there is any (a ground test)
+        # the loads on the tape: the hold, and gravity (a ground test; zero in orbit), a Constant
+        # in the forms whatever its value, so that a run with gravity and one without share
+        # every compiled form (a term of the residual changes the Jacobian's signature too)
         self.gravity = np.asarray(cfg.deployment.gravity, dtype=float)
-        loads = self.hold.form
-        self._weight = self._weight_work = None
-        if np.any(self.gravity):
-            self._weight = dolfinx.fem.form(forms.weight(self.gravity))
-            self._weight_work = dolfinx.fem.form(forms.weight_work(self.gravity))
-            loads = loads - forms.weight(self.gravity)
+        self.gravity_field = g = dolfinx.fem.Constant(model.mesh, self.gravity)
+        self._weight = dolfinx.fem.form(forms.weight(g))
+        self._weight_work = dolfinx.fem.form(forms.weight_work(g))
+        loads = self.hold.form - forms.weight(g)
 
         self.scheme = "conserving" if self.rho_inf == 1.0 else "alpha"
         if self.scheme == "alpha":
@@ -162,7 +162,7 @@ class DeploymentModel:
         """The external loads' work on the tape over the step just solved [J] (collective; before
         :meth:`advance`): the releasing hold's, and gravity's."""
         work = self.hold.work()
-        if self._weight_work is not None:
+        if np.any(self.gravity):
             work += global_scalar(self._weight_work, self.comm)
         return work
 
@@ -215,7 +215,7 @@ class DeploymentModel:
         b = internal.x.petsc_vec.copy()
         b.scale(-1.0)
         b.array[self.hold.end_dofs] += self.hold.dead_full
-        if self._weight is not None:
+        if np.any(self.gravity):
             weight = dolfinx.fem.Function(model.W)
             assemble_into(weight, self._weight)
             b.axpy(1.0, weight.x.petsc_vec)

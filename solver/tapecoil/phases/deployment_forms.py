@@ -143,19 +143,18 @@ class DeploymentForms:
         self.director_rate.interpolate(self._new_director_rate)
 
     def weight(self, gravity):
-        """The virtual work of gravity ``gravity`` (3,) [m/s^2] on the tape, in the direction dq:
+        """The virtual work of gravity ``gravity`` (a (3,) UFL vector, a Constant so that every
+        value, zero too, shares one compiled form) [m/s^2] on the tape, in the direction dq:
         rho h g . du per unit reference area (symmetric through the thickness: no director term)."""
         model = self.model
         du, _ = split_state(model.dq)
-        g = ufl.as_vector([float(c) for c in gravity])
-        return self.translational * ufl.dot(g, du) * model.jacobian * model.dx
+        return self.translational * ufl.dot(gravity, du) * model.jacobian * model.dx
 
     def weight_work(self, gravity):
         """Gravity's work over a step, from the integrator's previous state to the current one."""
         model = self.model
         u_old, _ = split_state(self.integrator.q_old)
-        g = ufl.as_vector([float(c) for c in gravity])
-        return self.translational * ufl.dot(g, model.u - u_old) * model.jacobian * model.dx
+        return self.translational * ufl.dot(gravity, model.u - u_old) * model.jacobian * model.dx
 
     def reaction(self):
         """The equation of motion at the converged state t_{n+1}, once the integrator has advanced

@@ -33,7 +33,7 @@ class HybridMotion:
     those ``loads(scheme)`` gives for the shell's scheme: a residual form of the shell's state
     taken as it is (a hold's, at the scheme's level) and point forces on the shell's dofs, and
     the weight of shell and beam under ``gravity`` (3,) [m/s^2] (``shell_weight``: the shell's
-    virtual work form of it, None without gravity).
+    virtual work form of it, zero without gravity).
     :meth:`step` takes one step; the parts are at rest unless :meth:`set_rates` starts them
     moving. ``shell_forms``: the shell's inertia (a
     :class:`~tapecoil.phases.deployment_forms.DeploymentForms`), ``beam``: the beam's
@@ -60,22 +60,20 @@ class HybridMotion:
         )
         F_static, _ = shell.forms()
         forces = self.shell_scheme.force_average(F_static)
-        # the weight of shell and beam (a ground test), None without gravity
+        # the weight of shell and beam (a ground test; zero in orbit), a Constant whatever its
+        # value, so that runs with and without gravity share their compiled forms
         self.gravity = np.asarray(gravity, dtype=float)
-        self.shell_weight = None
-        work = []
-        if np.any(self.gravity):
-            self.shell_weight = inertia.weight(self.gravity)
-            forces = forces - self.shell_weight
-            work.append(inertia.weight_work(self.gravity))
+        g = dolfinx.fem.Constant(shell.model.mesh, self.gravity)
+        self.shell_weight = inertia.weight(g)
+        forces = forces - self.shell_weight
+        work = [inertia.weight_work(g)]
         point_forces = []
         if loads is not None:
             form, point_forces = loads(self.shell_scheme)
             forces = forces + form
         F_s, J_s = inertia.alpha_forms(forces)
         self.beam = BeamDynamics(hybrid.beam, line_density, rotary_inertia, rho_inf=rho_inf, gravity=gravity)
-        if self.beam.weight_work is not None:
-            work.append(self.beam.weight_work)
+        work.append(self.beam.weight_work)
         self._weight_work = [dolfinx.fem.form(w) for w in work]
         self.settings = settings or SolverConfig()
         shell.point_forces.extend(point_forces)
@@ -125,6 +123,8 @@ class HybridMotion:
     def weight_work(self) -> float:
         """Gravity's work on shell and beam over the step just solved [J] (before the schemes
         move on; collective)."""
+        if not np.any(self.gravity):
+            return 0.0
         comm = self.hybrid.shell.comm
         return sum(global_scalar(form, comm) for form in self._weight_work)
 

@@ -77,10 +77,8 @@ class RootLoads:
     def __init__(self, model, eps: float = 1e-6):
         self.m, self.eps = model, eps
         tape = model.tape
-        reaction = model.forms.reaction()
-        if np.any(model.gravity):  # the root's own share of the weight is the attachment's too
-            reaction = reaction - model.forms.weight(model.gravity)
-        self.form = dolfinx.fem.form(reaction)
+        # the root's own share of the weight is the attachment's too
+        self.form = dolfinx.fem.form(model.forms.reaction() - model.forms.weight(model.gravity_field))
         self.reaction = dolfinx.fem.Function(model.model.W)
         nodes = tape.contact.nodes
         held = owned_constrained_dofs(model.model.W, model.bcs)
@@ -120,9 +118,7 @@ class HybridRootLoads:
         self.shell = shell.root is not None
         if self.shell:  # the window's own root, attached to the hub
             model = shell.model
-            form = motion.shell_forms.inertia_at_end() + shell.forms()[0]
-            if motion.shell_weight is not None:
-                form = form - motion.shell_weight
+            form = motion.shell_forms.inertia_at_end() + shell.forms()[0] - motion.shell_weight
             self.model, self.nodes = model, shell.contact.nodes
             held = owned_constrained_dofs(model.W, shell.root.bcs)
             n_owned = self.nodes.space.dofmap.index_map.size_local
