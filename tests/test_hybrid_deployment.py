@@ -277,11 +277,13 @@ def test_the_hybrids_root_loads_balance_the_tapes_momenta():
     assert abs(records[-1].external_work) > 0  # gravity has worked on the tape
 
 
+@pytest.mark.slow
 def test_the_hybrid_stops_where_the_coil_loosens_behind_its_window():
     """The flattened beam behind the window, on the coarse 12 rad coil's second turn, lifted off
     its turn by three thicknesses (its nodes moved radially): the steps' reading finds the gap, read from
     the beam's nodes against the spiral, and the run stops within the release's first steps with
-    a message naming the place, its last converged state kept."""
+    a message naming the place, its last converged state kept. Slow (`make validate`): the 12
+    rad coil takes about a minute."""
     from tapecoil.phases.hybrid_deployment import CoilLoosening
 
     deployment = short_deployment(MPI.COMM_WORLD, t_end=0.002, run=False, angle=12.0)
@@ -309,8 +311,10 @@ def test_the_hybrid_stops_where_the_coil_loosens_behind_its_window():
     assert 2.0 * h < gap < 5.0 * h and 0.8 * start <= at < start
 
 
+@pytest.mark.slow
 def test_the_release_window_holds_the_coil_its_wave_lifts():
-    """The coarse 12 rad coil let go with ``window_release`` = 0.1 m: the window at release
+    """Slow (`make validate`), on the 12 rad coil of the test above.
+    The coarse 12 rad coil let go with ``window_release`` = 0.1 m: the window at release
     reaches back that far behind the lift-off, on the elements' grid (a consistency check of
     the rule), where the coiling's window held 0.025 to 0.05 m; the sections placed there from
     the flattened beam are settled on the coil by a converged solve that moves them by less
@@ -338,9 +342,8 @@ def test_the_release_window_holds_the_coil_its_wave_lifts():
 @pytest.mark.mpi
 def test_the_release_window_on_two_ranks():
     """As above on 2 ranks: the lift-off read on the gathered line, the settling collective.
-    Slow (`make validate`): the 12 rad coil takes over a minute on 2 ranks, and the suite checks
-    the gathered lift-off and the release's settling on 2 ranks on the 4.5 rad coil
-    (test_two_ranks_deploy_the_hybrid_as_one)."""
+    Slow (`make validate`) as the serial one; the suite checks the gathered lift-off and the
+    release's settling on 2 ranks on the 4.5 rad coil (test_two_ranks_deploy_the_hybrid_as_one)."""
     assert MPI.COMM_WORLD.size > 1
     test_the_release_window_holds_the_coil_its_wave_lifts()
 
