@@ -50,12 +50,19 @@ def test_steady_coil_carries_the_edge_layers():
     _check(coiling_tension(_steel_on_hub(0.9), MPI.COMM_SELF, SHORT))
 
 
+# for 2 ranks against one: half a turn less of coil in steps twice as long (a quarter of the
+# work), whose sections are read as the steady coil's are, though not yet steady themselves
+QUICK = dataclasses.replace(SHORT, hub_angle=1.5, window=(0.5, 1.5), section_window=(0.5, 1.0), max_step=0.1)
+
+
 @pytest.mark.mpi
-def test_steady_coil_carries_the_edge_layers_on_two_ranks():
-    result = coiling_tension(_steel_on_hub(0.9), MPI.COMM_WORLD, SHORT)
-    serial = coiling_tension(_steel_on_hub(0.9), MPI.COMM_SELF, SHORT) if MPI.COMM_WORLD.rank == 0 else None
+def test_the_coils_sections_read_on_two_ranks_as_on_one():
+    """The coil's own sections (energy per unit length, tension across them, the edges' rise)
+    read on 2 ranks as on one, to 1e-6; their physics is the serial test's above."""
+    result = coiling_tension(_steel_on_hub(0.9), MPI.COMM_WORLD, QUICK)
+    serial = coiling_tension(_steel_on_hub(0.9), MPI.COMM_SELF, QUICK) if MPI.COMM_WORLD.rank == 0 else None
     serial = MPI.COMM_WORLD.bcast(serial, root=0)
-    _check(result)
+    assert result["coil_section_tension"] > 0 and result["edge_rise"] > 0
     for key in ("coil_energy_per_length", "coil_section_tension", "edge_rise"):
         assert result[key] == pytest.approx(serial[key], rel=1e-6), key
 
