@@ -103,8 +103,7 @@ class BeamDynamics:
         F = self.inertia_form + scheme.force_average(residual)
         # the weight (constant: not averaged) and its work over a step, gravity a Constant
         # whatever its value (zero too), so that runs with and without it share compiled forms
-        self.gravity = np.asarray(gravity, dtype=float)
-        g = dolfinx.fem.Constant(model.mesh, self.gravity)
+        g = dolfinx.fem.Constant(model.mesh, np.asarray(gravity, dtype=float))
         self.weight = self.line_density * ufl.dot(g, du) * model.dx
         u_old = ufl.as_vector([scheme.q_old[i] for i in range(3)])
         self.weight_work = self.line_density * ufl.dot(g, ufl.split(model.q)[0] - u_old) * model.dx
