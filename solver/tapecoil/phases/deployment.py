@@ -76,10 +76,11 @@ class DeploymentModel:
         # in the forms whatever its value, so that a run with gravity and one without share
         # every compiled form (a term of the residual changes the Jacobian's signature too)
         self.gravity = np.asarray(cfg.deployment.gravity, dtype=float)
-        self.gravity_field = g = dolfinx.fem.Constant(model.mesh, self.gravity)
-        self._weight = dolfinx.fem.form(forms.weight(g))
+        g = dolfinx.fem.Constant(model.mesh, self.gravity)
+        self.weight = forms.weight(g)  # its virtual work, a UFL form (the root loads take it too)
+        self._weight = dolfinx.fem.form(self.weight)
         self._weight_work = dolfinx.fem.form(forms.weight_work(g))
-        loads = self.hold.form - forms.weight(g)
+        loads = self.hold.form - self.weight
 
         self.scheme = "conserving" if self.rho_inf == 1.0 else "alpha"
         if self.scheme == "alpha":

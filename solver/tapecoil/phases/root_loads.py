@@ -78,7 +78,7 @@ class RootLoads:
         self.m, self.eps = model, eps
         tape = model.tape
         # the root's own share of the weight is the attachment's too
-        self.form = dolfinx.fem.form(model.forms.reaction() - model.forms.weight(model.gravity_field))
+        self.form = dolfinx.fem.form(model.forms.reaction() - model.weight)
         self.reaction = dolfinx.fem.Function(model.model.W)
         nodes = tape.contact.nodes
         held = owned_constrained_dofs(model.model.W, model.bcs)
