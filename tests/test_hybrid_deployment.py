@@ -290,7 +290,7 @@ def test_the_hybrid_stops_where_the_coil_loosens_behind_its_window():
     h = deployment.config.tape.h
     start = deployment.window()[0]
     assert start > 0.11  # beam behind the window on the second turn (from 0.094 m; 0.125 m)
-    assert deployment.lift_off()["beam_gap"] < h  # resting on its turn (0.53 h at most)
+    assert deployment.measures.lift_off()["beam_gap"] < h  # resting on its turn (0.53 h at most)
     beam = deployment.hybrid.beam.model
     frame = deployment.coiling.frame
     points = beam.node_points + beam.q.x.array[beam.node_u_dofs]
@@ -322,7 +322,7 @@ def test_the_release_window_holds_the_coil_its_wave_lifts():
     turn."""
     deployment = short_deployment(MPI.COMM_WORLD, t_end=0.002, run=False, angle=12.0, window_release=0.1)
     coiling, h = deployment.coiling, deployment.config.tape.h
-    lift = deployment.lift_off()["coiled_length"]
+    lift = deployment.measures.lift_off()["coiled_length"]
     start = deployment.window()[0]
     assert start / coiling.element == pytest.approx(round(start / coiling.element), abs=1e-9)
     assert abs(start - (lift - 0.1)) <= coiling.element * (1 + 1e-9)
@@ -335,7 +335,7 @@ def test_the_release_window_holds_the_coil_its_wave_lifts():
     assert settled["converged"] and 0 < settled["iterations"] and settled["moved"] < 2 * h
     assert deployment.run() == "t_end"
     assert deployment.time == pytest.approx(0.002)
-    assert deployment.lift_off()["beam_gap"] < h
+    assert deployment.measures.lift_off()["beam_gap"] < h
 
 
 @pytest.mark.slow

@@ -37,9 +37,10 @@ beam ahead of the ploy region, towards the free end, and beam becomes shell on t
 sections placed into shell from the flattened beam are then settled
 (:func:`~tapecoil.models.window_settling.settle_placed`).
 
-The deployed fraction is the full shell's measure (:func:`~tapecoil.measures.deployment.coiled_length`)
-read on the hybrid's centre line: the beam's line and the window's middle line, their inner face
-half a thickness inside them.
+After every step the deployment reads its measures
+(:class:`~tapecoil.phases.hybrid_deployment_measures.HybridDeploymentMeasures`): the energies, the
+tape's angular momentum about the hub's axis, the deployed fraction, the full shell's measure read
+on the hybrid's centre line, and the flattened beam's gap to its turn behind the window.
 
 The hybrid holds the tape behind the window flat on its turns (by default, ``model.beam_contact
 = "width"``, the flattened beam rests on them across its width: by its line alone its section
@@ -58,25 +59,22 @@ import math
 import time
 from dataclasses import dataclass
 
-import dolfinx
 import numpy as np
-import ufl
 from mpi4py import MPI
 
 from tapecoil.config.model import hybrid_need
 from tapecoil.core.coupled_newton import JointState
-from tapecoil.core.dofs import global_scalar, global_size, owned_size
+from tapecoil.core.dofs import owned_size
 from tapecoil.core.stepping import Continuation, ContinuationError
-from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
+from tapecoil.measures.deployment import LIFT_OFF_GAP
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.nodes import Nodes
 from tapecoil.models.window import carry_over
 from tapecoil.models.window_motion import carry_motion
 from tapecoil.models.window_settling import settle_at_rest, settle_placed
-from tapecoil.phases.deployment_forms import director_rates
-from tapecoil.phases.hybrid_line import centre_line, winding_along
+from tapecoil.phases.hybrid_deployment_measures import HybridDeploymentMeasures, coiled_along
 from tapecoil.phases.hybrid_motion import HybridMotion
-from tapecoil.phases.release import EndHold, split_state
+from tapecoil.phases.release import EndHold
 from tapecoil.phases.root_loads import HybridRootLoads
 
 __all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment"]
@@ -152,7 +150,9 @@ class HybridDeployment:
     """The deployment of ``coiling``'s tape (a :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`
     at its final hub angle) with the hybrid (see the module). :meth:`run` steps to
     ``deployment.lambda_end`` or ``deployment.t_end``; ``records`` holds a row per converged
-    step and ``moves`` the window's places, (time, start, end). The joint solvers read PETSc
+    step, ``moves`` the window's places, (time, start, end), and ``measures`` the present
+    window's :class:`~tapecoil.phases.hybrid_deployment_measures.HybridDeploymentMeasures`
+    (energies, angular momentum, lift-off, DOFs). The joint solvers read PETSc
     options under ``hybrid_deploy<k>_``, k the window's number from 0; ``solver.petsc_options``
     and ``deployment.petsc_options`` reach all of them.
 
@@ -191,7 +191,7 @@ class HybridDeployment:
         # the window reaches the free end, whose hold the release lets go, and holds at least
         # window_release of the coil behind the lift-off, where the release's wave runs; a
         # coil shorter than that keeps the coiling's window, and its flattened beam at the root
-        lift = self._coiled(old)[-1]
+        lift = coiled_along(old, coiling.frame, self.angle, tp)[-1]
         element = coiling.element
         wanted = element * math.floor((lift - cfg.model.window_release) / element + 1e-9)
         old_start, old_end = old.shell.surface.xi_range[0]
@@ -223,8 +223,8 @@ class HybridDeployment:
         return f"hybrid_deploy{len(self.moves)}"
 
     def window(self) -> tuple[float, float]:
-        (start, end), _ = self.hybrid.shell.surface.xi_range
-        return float(start), float(end)
+        """The shell window's start and end along the tape [m]."""
+        return self.measures.window()
 
     def _motion(self, hybrid, release: bool) -> HybridMotion:
         cfg = self.config
@@ -245,86 +245,12 @@ class HybridDeployment:
             gravity=cfg.deployment.gravity,
         )
         motion.set_load(self.angle)
-        shell = hybrid.shell.model
-        v_u, v_theta = split_state(motion.shell_scheme.v_old)
-        _, d_dot, _ = director_rates(shell, shell.theta, v_theta)
-        rho, h = cfg.tape.density, cfg.tape.h
-        kinetic = 0.5 * rho * h * (ufl.dot(v_u, v_u) + h**2 / 12 * ufl.dot(d_dot, d_dot))
-        self._shell_kinetic = dolfinx.fem.form(kinetic * shell.jacobian * shell.dx)
-        self._strain = dolfinx.fem.form(shell.strain_energy)
-        self._contact = dolfinx.fem.form(hybrid.shell.contact.energy)
-        beam = hybrid.beam
-        self._beam_contact = dolfinx.fem.form(sum(beam.energy_terms)) if beam.energy_terms else None
-        frame = self.coiling.frame
-        spin = motion.shell_forms.angular_momentum(frame)
-        self._shell_momentum = dolfinx.fem.form(spin * shell.jacobian * shell.dx)
-        self.root_loads = HybridRootLoads(motion, frame)
+        reach = self.coiling.window.behind + self.coiling.move
+        self.measures = HybridDeploymentMeasures(
+            hybrid, motion, self.coiling.frame, self.angle, cfg.tape, reach
+        )
+        self.root_loads = HybridRootLoads(motion, self.coiling.frame)
         return motion
-
-    # -- measures -------------------------------------------------------------------------------
-    def dofs(self) -> int:
-        """The hybrid's unknowns: its shell's and its beam's (collective)."""
-        h = self.hybrid
-        return global_size(h.shell.model.W) + global_size(h.beam.model.W)
-
-    def strain_energy(self) -> float:
-        """The strain energy of shell and beam [J] (collective)."""
-        return global_scalar(self._strain, self.comm) + self.hybrid.beam.model.strain_energy()
-
-    def contact_energy(self) -> float:
-        """The penalty energy of the shell's and the beam's contact with the hub and the turns
-        [J] (collective)."""
-        beam = 0.0 if self._beam_contact is None else global_scalar(self._beam_contact, self.comm)
-        return global_scalar(self._contact, self.comm) + beam
-
-    def energies(self) -> dict[str, float]:
-        """The strain, contact and kinetic energy [J] (collective)."""
-        return {
-            "strain": self.strain_energy(),
-            "contact": self.contact_energy(),
-            "kinetic": self.kinetic_energy(),
-        }
-
-    def kinetic_energy(self) -> float:
-        """The kinetic energy of shell and beam [J], from the last converged rates (collective)."""
-        return global_scalar(self._shell_kinetic, self.comm) + self.motion.beam.kinetic_energy()
-
-    def angular_momentum(self) -> float:
-        """The angular momentum of shell and beam about the hub's axis [kg m^2/s], from the last
-        converged rates (collective): the hub held, the root's torque changes it."""
-        frame = self.coiling.frame
-        momentum, spin = np.split(self.motion.beam.momenta(), 2)  # the beam's, about the origin
-        beam = np.dot(frame.axis, spin - np.cross(frame.axis_point, momentum))
-        return global_scalar(self._shell_momentum, self.comm) + float(beam)
-
-    def lift_off(self) -> dict[str, float]:
-        """The coiled length [m] and the deployed fraction lambda, by the full shell's measure
-        (:func:`~tapecoil.measures.deployment.coiled_length`) on the hybrid's centre line, the
-        inner face half a thickness inside it (collective)."""
-        tp = self.config.tape
-        x, psi, gap, coiled = self._coiled(self.hybrid)
-        # the stretch of beam that the next moves place into shell, where it rests on a turn
-        # (on the hub, by the root, the release lifts it by 2 to 2.5 h: docs/hybrid.md)
-        start, reach = self.window()[0], self.coiling.window.behind + self.coiling.move
-        behind = (x < start - 1e-9 * tp.L) & (x > start - reach) & (psi > 2 * math.pi)
-        loosest = int(np.argmax(np.where(behind, gap, -np.inf))) if behind.any() else None
-        return {
-            "coiled_length": coiled,
-            "lambda": 1.0 - coiled / tp.L,
-            # the flattened beam's largest gap to its turn there [m], and where [m]
-            "beam_gap": float(gap[loosest]) if loosest is not None else 0.0,
-            "beam_gap_at": float(x[loosest]) if loosest is not None else 0.0,
-        }
-
-    def _coiled(self, hybrid) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-        """Along ``hybrid``'s centre line: the places [m], the winding angles [rad], the inner
-        face's gaps to the spiral of turns [m], and the coiled length [m] (collective)."""
-        tp = self.config.tape
-        x, points = centre_line(hybrid)
-        psi = winding_along(self.coiling.frame, self.angle, points)
-        obstacle = hybrid.shell.contact.spiral_radius(psi)
-        gap = self.coiling.frame.polar(points.T)[0] - 0.5 * tp.h - obstacle
-        return x, psi, gap, coiled_length(x, gap, obstacle, LIFT_OFF_GAP * tp.h)
 
     # -- stepping -------------------------------------------------------------------------------
     def step_error(self) -> float:
@@ -367,7 +293,7 @@ class HybridDeployment:
     def _move(self, start: float) -> None:
         old, motion = self.hybrid, self.motion
         rates = motion.rates()
-        before = self.energies()
+        before = self.measures.energies()
         # the fastest node's speed (the translations'; the directors' angles may spin fast)
         speeds = (rates[0][Nodes(old.shell.model).u_dofs], rates[2][old.beam.model.node_u_dofs])
         fastest = self.comm.allreduce(max(float(np.abs(v).max(initial=0.0)) for v in speeds), op=MPI.MAX)
@@ -382,7 +308,7 @@ class HybridDeployment:
         self.hybrid = new
         self.motion = self._motion(new, release=False)
         self.motion.set_rates(new_rates)
-        after = self.energies()
+        after = self.measures.energies()
         self.placed_settling.append(
             {
                 **settling,
@@ -414,7 +340,8 @@ class HybridDeployment:
         """The state's record (collective): of the converged ``step`` (a
         :class:`~tapecoil.core.stepping.StepRecord`), or of the release (no step); the wall time
         from ``t0`` (:func:`time.perf_counter`)."""
-        reading = self.lift_off()
+        m = self.measures
+        reading = m.lift_off()
         self.beam_gap = (reading["beam_gap"], reading["beam_gap_at"])
         return DeploymentRecord(
             self.time,
@@ -422,15 +349,15 @@ class HybridDeployment:
             reading["lambda"],
             reading["coiled_length"],
             self.window(),
-            self.strain_energy(),
-            self.contact_energy(),
-            self.kinetic_energy(),
+            m.strain_energy(),
+            m.contact_energy(),
+            m.kinetic_energy(),
             self.external_work,
             0 if step is None else int(step.iterations),
             0 if step is None else int(step.cutbacks),
             0 if step is None else int(step.rejected),
             0.0 if t0 is None else time.perf_counter() - t0,
-            self.angular_momentum(),
+            m.angular_momentum(),
             self.root_loads(),
         )
 

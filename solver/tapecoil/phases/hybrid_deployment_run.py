@@ -105,7 +105,7 @@ class HybridDeploymentPhase(Phase):
             **record.root_loads,
             "window_start": record.window[0],
             "window_end": record.window[1],
-            "dofs": self.deployment.dofs(),
+            "dofs": self.deployment.measures.dofs(),
             "wall_time": time.perf_counter() - self._t0,
         }
 

@@ -86,7 +86,7 @@ def deploy_side_by_side(
             "root_torque": np.array([r.root_loads["root_torque"] for r in records]),
             "completed": outcome == "deployed",
             "stopped": stopped,
-            "dofs": deployment.dofs(),
+            "dofs": deployment.measures.dofs(),
             "steps": len(deployment.records),
             "newton_iterations": sum(r.iterations for r in deployment.records),
             "wall_time": hybrid_wall,
