@@ -121,10 +121,6 @@ def test_integer_accepted_for_float(tmp_path):
             r"model\.kind = 'hybrid' needs mesh\.grading = 1",
         ),
         (
-            {"model": {"kind": "hybrid"}, "deployment": {"hub": "free"}},
-            r"model\.kind = 'hybrid' needs deployment\.hub = 'fixed'",
-        ),
-        (
             {"model": {"kind": "hybrid"}, "deployment": {"rho_inf": 1.0}},
             r"model\.kind = 'hybrid' needs deployment\.rho_inf < 1",
         ),

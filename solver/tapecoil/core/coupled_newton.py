@@ -355,9 +355,9 @@ class CoupledSNESSolver:
             sub.array[:] = blk.q.x.petsc_vec.array_r
             x.restoreSubVector(iset, sub)
 
-    def _residual(self, _snes, x, r) -> None:
-        t0 = time.perf_counter()
-        self._update_states(x)
+    def _assemble_blocks(self, conditions: bool) -> None:
+        """Each block's residual at the present states into ``self.b``: with its Dirichlet
+        conditions (``conditions``; the residual on a held dof is q - g) or without them."""
         cp = self.coupling
         gradient = cp.gradient()
         for k, (blk, b) in enumerate(zip(self.blocks, self.b, strict=True)):
@@ -367,13 +367,26 @@ class CoupledSNESSolver:
                 def extra(local, g=gradient):
                     local[cp.dofs[cp.owned]] += g[cp.owned]
 
-            assemble_residual(
-                b, self.F_forms[k], self.J_forms[k], blk.bcs, blk.q, [], blk.point_forces, extra
-            )
+            bcs = blk.bcs if conditions else []
+            assemble_residual(b, self.F_forms[k], self.J_forms[k], bcs, blk.q, [], blk.point_forces, extra)
+
+    def _residual(self, _snes, x, r) -> None:
+        t0 = time.perf_counter()
+        self._update_states(x)
+        self._assemble_blocks(conditions=True)
+        for k, b in enumerate(self.b):
             sub = r.getSubVector(self.index_sets[k])
             sub.array[:] = b.array_r
             r.restoreSubVector(self.index_sets[k], sub)
         self.timings["residual"] += time.perf_counter() - t0
+
+    def free_residuals(self) -> list[np.ndarray]:
+        """Each block's residual at the present states without its Dirichlet conditions, on its
+        owned dofs (collective): on a held dof, the force the condition supplies (the support's
+        reaction, at the levels the solve's equations hold at)."""
+        self.coupling.read()
+        self._assemble_blocks(conditions=False)
+        return [b.array_r.copy() for b in self.b]
 
     def _jacobian(self, _snes, x, J, P) -> None:
         t0 = time.perf_counter()

@@ -400,32 +400,40 @@ class HybridCoiling:
             )
             self.angle = target
 
-    def carry_into(self, model, hybrid: HybridProblem | None = None) -> None:
+    def carry_into(self, model, hybrid: HybridProblem | None = None, angle: float | None = None) -> None:
         """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingModel` of
         the same configuration) to this hybrid's state (or ``hybrid``'s: one of this tape at this
-        hub angle, a deploying one): the hub angle and the pull, the shell's
-        state where the window is and the beams' sections placed elsewhere
+        hub angle, or at the hub angle ``angle`` [rad], a deploying one): the hub angle and the
+        pull, the shell's state where the window is and the beams' sections placed elsewhere
         (:func:`~tapecoil.models.window.carry_over`), and the winding angles (collective). The
         full shell is then in the hybrid's configuration, not in its own equilibrium."""
         hybrid = hybrid or self.hybrid
-        x, points = centre_line(hybrid)
-        psi = winding_along(self.frame, self.angle, points)
-        model.set_hub_angle(self.angle)
+        angle = self.angle if angle is None else angle
+        x, psi = self._winding_along_line(hybrid, angle)
+        model.set_hub_angle(angle)
         model.tension.value = self.config.coiling.tension
         carry_over(hybrid, full_shell(model.model))
-        contact = model.contact
-        contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
-        contact.update(self.angle)
+        self._set_shell_winding(model.contact, x, psi, angle)
 
-    def carry_winding(self, old: HybridProblem, new: HybridProblem) -> None:
+    def carry_winding(self, old: HybridProblem, new: HybridProblem, angle: float | None = None) -> None:
         """The winding angles of ``new``'s beam and shell (a hybrid ``old``'s state was carried
-        into) from ``old``'s centre line at this coiling's hub angle (collective)."""
-        x, points = centre_line(old)
-        psi = winding_along(self.frame, self.angle, points)
+        into) from ``old``'s centre line at this coiling's hub angle, or at ``angle`` [rad]
+        (collective)."""
+        angle = self.angle if angle is None else angle
+        x, psi = self._winding_along_line(old, angle)
         new.beam.set_winding(lambda s: np.interp(s, x, psi))
-        contact = new.shell.contact
+        self._set_shell_winding(new.shell.contact, x, psi, angle)
+
+    def _winding_along_line(self, hybrid: HybridProblem, angle: float) -> tuple[np.ndarray, np.ndarray]:
+        """The places [m] along ``hybrid``'s centre line and their winding angles [rad] at the hub
+        angle ``angle`` (collective)."""
+        x, points = centre_line(hybrid)
+        return x, winding_along(self.frame, angle, points)
+
+    @staticmethod
+    def _set_shell_winding(contact, x: np.ndarray, psi: np.ndarray, angle: float) -> None:
         contact.psi.x.array[:] = np.interp(contact.nodes.xi[0], x, psi)
-        contact.update(self.angle)
+        contact.update(angle)
 
     def _move_window(self) -> None:
         tp = self.config.tape

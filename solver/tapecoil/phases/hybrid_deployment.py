@@ -12,7 +12,9 @@ go, the state carried over
 (:func:`~tapecoil.models.window_settling.settle_at_rest`), and the end is held by the full shell's release
 hold (:class:`~tapecoil.phases.release.EndHold`: a spring to the stowed end and the dead
 forces that held it there, let go over ``deployment.release_time``). The hub is held at its
-stowed angle; the root stays clamped to it; with ``deployment.gravity`` the shell and the beam
+stowed angle (``deployment.hub = "fixed"``) or free to turn with its rotary inertia ``hub.inertia``
+(``"free"``: :mod:`tapecoil.phases.hybrid_free_hub`, from the torque the tape held it with);
+the root stays clamped to it; with ``deployment.gravity`` the shell and the beam
 carry their weight from release (starting to fall at g where the hold does not hold them:
 :meth:`~tapecoil.phases.hybrid_motion.HybridMotion.start_falling`); the flattened beam on the
 coil and the window's
@@ -66,6 +68,7 @@ from tapecoil.config.model import hybrid_need
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import owned_size
 from tapecoil.core.stepping import Continuation, ContinuationError
+from tapecoil.hub.rotor import HubRotor
 from tapecoil.measures.deployment import LIFT_OFF_GAP
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.nodes import Nodes
@@ -73,6 +76,7 @@ from tapecoil.models.window import carry_over
 from tapecoil.models.window_motion import carry_motion
 from tapecoil.models.window_settling import settle_at_rest, settle_placed
 from tapecoil.phases.hybrid_deployment_measures import HybridDeploymentMeasures, coiled_along
+from tapecoil.phases.hybrid_free_hub import HybridFreeHub
 from tapecoil.phases.hybrid_motion import HybridMotion
 from tapecoil.phases.release import EndHold
 from tapecoil.phases.root_loads import HybridRootLoads
@@ -89,12 +93,14 @@ PROBE_SHARE = 1e-3
 class DeploymentRecord:
     """A converged step of the hybrid's deployment: time [s], the step to it [s], the deployed
     fraction lambda and the coiled length [m], the window (start, end) [m] along the tape, the
-    strain, contact and kinetic energy [J] (the ties' penalty apart), the work of the loads on
-    the tape since release (the release's hold, gravity) [J], the step's Newton iterations,
-    cut-backs and rejected steps, the wall time since release [s], the tape's angular momentum
-    about the hub's axis [kg m^2/s] and the root's loads on the hub
+    strain, contact and kinetic energy [J] (the ties' penalty apart; a free hub's kinetic
+    energy in it too), the work of the loads on the tape since release (the release's hold,
+    gravity) [J], the step's Newton iterations, cut-backs and rejected steps, the wall time since
+    release [s], the angular momentum of the tape and a free hub about the hub's axis
+    [kg m^2/s], the root's loads on the hub
     (:class:`~tapecoil.phases.root_loads.HybridRootLoads`: ``root_force_x`` ... ``root_torque``
-    [N], [N m])."""
+    [N], [N m]), and the hub's angle [rad], rate [rad/s] (coiling sense) and kinetic energy [J]
+    (a held hub's: its stowed angle, 0, 0)."""
 
     time: float
     step: float
@@ -111,6 +117,9 @@ class DeploymentRecord:
     wall_time: float
     angular_momentum: float
     root_loads: dict
+    hub_angle: float
+    hub_rate: float
+    hub_kinetic_energy: float
 
 
 class CoilLoosening(ContinuationError):
@@ -127,6 +136,7 @@ def _deploying(coiled, config):
     same = dataclasses.replace(
         config,
         deployment=coiled.deployment,
+        hub=dataclasses.replace(config.hub, inertia=coiled.hub.inertia),
         model=dataclasses.replace(config.model, window_release=coiled.model.window_release),
     )
     if same != coiled:
@@ -135,8 +145,8 @@ def _deploying(coiled, config):
         ]
         raise ValueError(
             f"the hybrid deploys the tape as it was coiled: the configuration differs from the "
-            f"coiling's in [{'], ['.join(differ)}] (only [deployment] and model.window_release "
-            "act from the release on)"
+            f"coiling's in [{'], ['.join(differ)}] (only [deployment], hub.inertia and "
+            "model.window_release act from the release on)"
         )
     return config
 
@@ -157,8 +167,8 @@ class HybridDeployment:
     and ``deployment.petsc_options`` reach all of them.
 
     ``config``: the deployment's configuration, by default the coiling's. It may differ from
-    the coiling's in its [deployment] table and in ``model.window_release``, which act from the
-    release on, so that one coiled tape deploys under several settings; the coiling is left as
+    the coiling's in its [deployment] table, ``hub.inertia`` and ``model.window_release``, which
+    act from the release on, so that one coiled tape deploys under several settings; the coiling is left as
     it was."""
 
     def __init__(self, coiling, config=None):
@@ -213,7 +223,15 @@ class HybridDeployment:
             self.placed_settling.append(settle_at_rest(self.hybrid, cfg))
             self._check_settled(self.placed_settling[-1])
         self.hold = None
+        self.rotor = self.free_hub = None
         self.motion = self._motion(self.hybrid, release=True)
+        if d.hub == "free":
+            self.rotor = HubRotor(cfg.hub.inertia, self.motion.shell_scheme.parameters, self.angle)
+            self.free_hub = self._free_hub(self.motion)
+            # at rest the schemes' levels hold the internal forces alone, at any step
+            for scheme in self.motion.schemes:
+                scheme.set_step(d.dt)
+            self.free_hub.start()
         if np.any(self.motion.gravity):
             self.motion.start_falling()
         self.moves.append((0.0, *self.window()))
@@ -250,7 +268,15 @@ class HybridDeployment:
             hybrid, motion, self.coiling.frame, self.angle, cfg.tape, reach
         )
         self.root_loads = HybridRootLoads(motion, self.coiling.frame)
+        if self.rotor is not None:
+            self.free_hub = self._free_hub(motion)
         return motion
+
+    def _free_hub(self, motion) -> HybridFreeHub:
+        """The free hub's equation solved with ``motion``'s."""
+        tp = self.config.tape
+        scale = self.config.wall.bending.D11 * tp.b / tp.R  # [N m]: the section's moment at 1/R
+        return HybridFreeHub(motion, self.rotor, scale)
 
     # -- stepping -------------------------------------------------------------------------------
     def step_error(self) -> float:
@@ -300,7 +326,7 @@ class HybridDeployment:
         probe = PROBE_SHARE * self.coiling.element / max(fastest, 1e-3)
         new = self.coiling.build(start, self._name(), released=True)
         new_rates = carry_motion(old, new, rates, probe)
-        self.coiling.carry_winding(old, new)
+        self.coiling.carry_winding(old, new, self.angle)
         settling = settle_placed(new, old.shell.surface.xi_range[0], self.config)
         self._check_settled(settling)
         motion.destroy()
@@ -335,12 +361,16 @@ class HybridDeployment:
             self.external_work += self.hold.work()
         self.external_work += motion.weight_work()
         motion.commit_step()
+        if self.rotor is not None:
+            self.rotor.advance()
+            self.angle = self.measures.hub_angle = self.rotor.angle
 
     def record(self, step=None, t0: float | None = None) -> DeploymentRecord:
         """The state's record (collective): of the converged ``step`` (a
         :class:`~tapecoil.core.stepping.StepRecord`), or of the release (no step); the wall time
         from ``t0`` (:func:`time.perf_counter`)."""
-        m = self.measures
+        m, rotor = self.measures, self.rotor
+        hub_kinetic = 0.0 if rotor is None else rotor.kinetic_energy()
         reading = m.lift_off()
         self.beam_gap = (reading["beam_gap"], reading["beam_gap_at"])
         return DeploymentRecord(
@@ -351,14 +381,17 @@ class HybridDeployment:
             self.window(),
             m.strain_energy(),
             m.contact_energy(),
-            m.kinetic_energy(),
+            m.kinetic_energy() + hub_kinetic,
             self.external_work,
             0 if step is None else int(step.iterations),
             0 if step is None else int(step.cutbacks),
             0 if step is None else int(step.rejected),
             0.0 if t0 is None else time.perf_counter() - t0,
-            m.angular_momentum(),
+            m.angular_momentum() + (0.0 if rotor is None else rotor.angular_momentum()),
             self.root_loads(),
+            self.angle,
+            0.0 if rotor is None else rotor.rate,
+            hub_kinetic,
         )
 
     def run(self, on_step=None) -> str:
@@ -421,6 +454,8 @@ class HybridDeployment:
                 def predict(t_from, t_to, motion=motion):
                     for scheme in motion.schemes:
                         scheme.predict(t_to - t_from)
+                    if self.rotor is not None:
+                        self.rotor.predict(t_to - t_from)
 
                 span = end - self.time
                 control = cfg.solver.control(
@@ -430,7 +465,7 @@ class HybridDeployment:
                     range_fraction=d.t_end / span,
                 )
                 continuation = Continuation(
-                    motion.solver.solve,
+                    motion.solver.solve if self.free_hub is None else self.free_hub.solve,
                     set_time,
                     JointState(self.hybrid.shell.model.q, self.hybrid.beam.model.q),
                     control,
@@ -445,6 +480,10 @@ class HybridDeployment:
                     continuation.run(self.time, end, first_step=first)
                 except _Restart:
                     continue
+                except ContinuationError:
+                    if self.free_hub is not None:  # the root back where the last converged step left it
+                        self.free_hub.place(self.rotor.angle)
+                    raise
             if outcome == "deployed":
                 break
         return outcome

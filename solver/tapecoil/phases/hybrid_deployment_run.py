@@ -93,7 +93,11 @@ class HybridDeploymentPhase(Phase):
             "rejected_steps": record.rejected_steps,
             "lambda": record.deployed,
             "coiled_length": record.coiled_length,
-            "hub_angle": self.coiling.angle,
+            # the hub: its angle [rad] and rate [rad/s] (coiling sense), its kinetic energy (in
+            # kinetic_energy too), and the angular momentum of tape and hub about its axis
+            "hub_angle": record.hub_angle,
+            "hub_rate": record.hub_rate,
+            "hub_kinetic_energy": record.hub_kinetic_energy,
             "strain_energy": record.strain_energy,
             "contact_energy": record.contact_energy,
             "kinetic_energy": record.kinetic_energy,
@@ -122,7 +126,7 @@ class HybridDeploymentPhase(Phase):
             self.stop.check(self.comm)
 
     def _carry(self) -> None:
-        self.coiling.carry_into(self.model, self.deployment.hybrid)
+        self.coiling.carry_into(self.model, self.deployment.hybrid, self.deployment.angle)
 
     def advance(self) -> None:
         d = self.config.deployment

@@ -323,7 +323,7 @@ def free_hub_figure(h: dict[str, np.ndarray], config, lam0: float, path: Path) -
     model = deployment_reference(config, lam0, energy="plate")
     lam = np.linspace(lam0, 1.0, 200)
     fig, (left, right) = plt.subplots(1, 2, figsize=(10.0, 4.2))
-    left.plot(h["lambda"], h["hub_angle"] - h["hub_angle"][0], lw=2, label="shell")
+    left.plot(h["lambda"], h["hub_angle"] - h["hub_angle"][0], lw=2, label=config.model.kind)
     left.plot(lam, model.hub_turn(lam), ":", label="free-hub model (angular momentum 0)")
     left.set(xlabel="deployed fraction lambda", ylabel="hub turn since release [rad]", title="free hub")
     right.plot(h["time"], h["hub_rate"])

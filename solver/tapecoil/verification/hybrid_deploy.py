@@ -44,11 +44,12 @@ def deploy_side_by_side(
     """``config``'s tape on the mesh ``preset`` coiled to ``angle`` [rad] by the hybrid, then
     deployed to ``deployment.lambda_end`` by the hybrid and (``full_shell``), from the hybrid's
     coil settled in the full shell, by the full shell. Returns for each (``"hybrid"``,
-    ``"full_shell"``) the times [s], deployed fractions, strain and kinetic energies [J] of its
-    steps, its DOFs, steps, Newton iterations and wall time [s] of the deployment; the hybrid's
-    message if it stopped before ``lambda_end`` (its rows up to there kept), its
-    coiling's wall time [s] and steps, its window moves (time, start, end), their settling
-    figures and its rows' energies (collective)."""
+    ``"full_shell"``) the times [s], deployed fractions, strain and kinetic energies [J], root
+    torques [N m], hub angles [rad] and angular momenta [kg m^2/s] of its steps (the hybrid's
+    hub rates [rad/s] too), its DOFs, steps, Newton iterations and wall time [s] of the
+    deployment; the hybrid's message if it stopped before ``lambda_end`` (its rows up to there
+    kept), its coiling's wall time [s] and steps, its window moves (time, start, end), their
+    settling figures and its rows' energies (collective)."""
     from tapecoil.phases.coiling import CoilingModel
     from tapecoil.phases.deployment import DeploymentModel
     from tapecoil.phases.deployment_run import DeploymentRun
@@ -84,6 +85,9 @@ def deploy_side_by_side(
             "strain_energy": np.array([r.strain_energy for r in records]),
             "kinetic_energy": np.array([r.kinetic_energy for r in records]),
             "root_torque": np.array([r.root_loads["root_torque"] for r in records]),
+            "hub_angle": np.array([r.hub_angle for r in records]),
+            "hub_rate": np.array([r.hub_rate for r in records]),
+            "angular_momentum": np.array([r.angular_momentum for r in records]),
             "completed": outcome == "deployed",
             "stopped": stopped,
             "dofs": deployment.measures.dofs(),
@@ -120,6 +124,8 @@ def deploy_side_by_side(
         "strain_energy": np.array([r["strain_energy"] for r in rows]),
         "kinetic_energy": np.array([r["kinetic_energy"] for r in rows]),
         "root_torque": np.array([r["root_torque"] for r in rows]),
+        "hub_angle": np.array([r["hub_angle"] for r in rows]),
+        "angular_momentum": np.array([r["angular_momentum"] for r in rows]),
         "completed": result.completed,
         "dofs": global_size(full.model.W),
         "steps": len(rows) - 1,

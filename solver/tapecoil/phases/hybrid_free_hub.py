@@ -1,0 +1,172 @@
+"""The hybrid's deployment with the hub free to turn: the hub's equation of motion solved with
+the shell's and the beam's.
+
+The tape's root is attached to the hub: the flattened beam's root node while the window starts
+past the root, the window's root edge once it starts there. Its dofs are prescribed, g(zeta),
+by the hub angle zeta (the hybrid's load parameter, :meth:`HybridProblem._set_load`). The hub
+(:class:`~tapecoil.hub.rotor.HubRotor`) obeys, as with the full shell
+(:mod:`tapecoil.phases.free_hub`),
+
+    phi(zeta) = J a_m(zeta) + G(zeta) . F(q) = 0,
+
+F the joint residual of shell and beam without the root's conditions (on the root's dofs, the
+force the attachment supplies to the tape, at the generalized-alpha levels of the tape's own
+equations; :meth:`CoupledSNESSolver.free_residuals`) and G = dg/dzeta the rate of the root's
+prescribed dofs as the hub turns (central differences over ``angle_step``): G . F is the torque
+the hub exerts on the tape. The spiral of turns is read from the winding angles, the
+material's, and puts no torque on the hub.
+
+Each trial angle is a joint solve of shell and beam with the root held at g(zeta). phi is
+solved by Newton's method with its total derivative along the tape's equilibria, as the full
+shell's: to first order a change of angle moves the tape by w dzeta, with A w = [-(K G) on the
+free dofs, G on the root's], A the joint Jacobian the last Newton iteration factorised (the
+root's rows the identity) and K G the action of the Jacobian without conditions, here the
+central difference of the free residual along G (two residuals, where the full shell
+assembles the action's form), and
+
+    dphi/dzeta = J (1 - alpha_m) / (beta dt^2) + G' . F + (K G) . w,
+
+(K G) . w standing for G . K w, which it is where K is symmetric; where it is not, only the
+convergence slows: phi itself is exact.
+
+The step dzeta = -phi / phi' carries the tape along by w dzeta, so the next joint solve starts
+on its new equilibrium to first order and takes one or two iterations.
+"""
+
+from __future__ import annotations
+
+import dolfinx.fem.petsc
+import numpy as np
+from petsc4py import PETSc
+
+from tapecoil.core.dofs import owned_constrained_dofs
+from tapecoil.core.newton import SolveResult
+
+__all__ = ["HybridFreeHub"]
+
+
+class HybridFreeHub:
+    """The hub's equation and a :class:`~tapecoil.phases.hybrid_motion.HybridMotion`'s solved
+    together (see the module): ``rotor`` the hub, ``moment_scale`` [N m] the size below which a
+    torque is round-off (the section's bending moment at 1/R)."""
+
+    angle_step = 1e-4  # [rad]: the central differences of the root's prescribed dofs
+    # [rad]: the central difference of the free residual along G (the root moved by about
+    # 1e-8 m: its truncation and rounding both far below the tangent's use, a predictor)
+    action_step = 1e-6
+    max_iterations = 10
+    # phi converged: this fraction of the torques in balance, or of the section's moment
+    rtol, floor = 1e-7, 1e-9
+    angle_round_off = 1e-14  # [-]: a change of angle below this relative size changes nothing
+
+    def __init__(self, motion, rotor, moment_scale: float):
+        self.motion, self.rotor, self.moment_scale = motion, rotor, moment_scale
+        self.hybrid, self.solver = motion.hybrid, motion.solver
+        self.comm = self.hybrid.shell.comm
+        self._held = [owned_constrained_dofs(blk.q.function_space, blk.bcs) for blk in self.solver.blocks]
+        self.iterations = 0  # the hub's Newton steps over the run
+
+    def place(self, angle: float) -> None:
+        """The root (the beam's clamp or the window's attachment) at the hub angle ``angle``."""
+        self.hybrid._set_load(angle)
+
+    def _prescribed(self, angle: float) -> list[np.ndarray]:
+        self.place(angle)
+        out = []
+        for blk, b in zip(self.solver.blocks, self.solver.b, strict=True):
+            with b.localForm() as local:
+                local.set(0.0)
+            dolfinx.fem.petsc.set_bc(b, blk.bcs)
+            out.append(b.array_r.copy())
+        return out
+
+    def root_rates(self, angle: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """G and G' at ``angle``: each block's rates of its prescribed owned dofs (zero off the
+        held dofs); the root left at ``angle``."""
+        e = self.angle_step
+        plus, minus, here = self._prescribed(angle + e), self._prescribed(angle - e), self._prescribed(angle)
+        rates = [(p - m) / (2 * e) for p, m in zip(plus, minus, strict=True)]
+        curvatures = [(p - 2 * h + m) / e**2 for p, h, m in zip(plus, here, minus, strict=True)]
+        return rates, curvatures
+
+    def _dot(self, a: list[np.ndarray], b: list[np.ndarray]) -> float:
+        return self.comm.allreduce(sum(float(x @ y) for x, y in zip(a, b, strict=True)))
+
+    def torque(self, angle: float) -> float:
+        """G . F [N m] at the present states, the root at ``angle`` (collective): the torque the
+        hub exerts on the tape at the levels of the tape's equations."""
+        rates, _ = self.root_rates(angle)
+        return self._dot(rates, self.solver.free_residuals())
+
+    def start(self) -> None:
+        """At release, at rest: the hub's acceleration under the torque that the tape held it
+        with (the coiling's), J a = -G . F (a massless hub is balanced by the tape alone)."""
+        rotor = self.rotor
+        if rotor.inertia > 0:
+            rotor.acceleration = -self.torque(rotor.angle) / rotor.inertia
+
+    def _move_states(self, change: list[np.ndarray]) -> None:
+        for blk, dq in zip(self.solver.blocks, change, strict=True):
+            blk.q.x.array[: dq.size] += dq
+            blk.q.x.scatter_forward()
+
+    def _action(self, rates: list[np.ndarray]) -> list[np.ndarray]:
+        """K G: the free residual's central difference along G (owned arrays; collective)."""
+        e = self.action_step
+        self._move_states([e * g for g in rates])
+        plus = self.solver.free_residuals()
+        self._move_states([-2 * e * g for g in rates])
+        minus = self.solver.free_residuals()
+        self._move_states([e * g for g in rates])
+        return [(p - m) / (2 * e) for p, m in zip(plus, minus, strict=True)]
+
+    def _response(self, rates: list[np.ndarray], action: list[np.ndarray]) -> list[np.ndarray]:
+        """w: A w = [-(K G) free, G held], by the joint solver's factorisation (collective)."""
+        solver = self.solver
+        rhs, w = solver.r.duplicate(), solver.x.duplicate()
+        for iset, g, kg, held in zip(solver.index_sets, rates, action, self._held, strict=True):
+            sub = rhs.getSubVector(iset)
+            sub.array[:] = -kg
+            sub.array[held] = g[held]
+            rhs.restoreSubVector(iset, sub)
+        solver.snes.getKSP().solve(rhs, w)
+        out = []
+        for iset in solver.index_sets:
+            sub = w.getSubVector(iset)
+            out.append(sub.array_r.copy())
+            w.restoreSubVector(iset, sub)
+        rhs.destroy()
+        w.destroy()
+        return out
+
+    def solve(self) -> SolveResult:
+        """The step's shell, beam and hub solved together from the predicted state and angle."""
+        rotor = self.rotor
+        total, result = 0, None
+        for _ in range(self.max_iterations):
+            self.place(rotor.new_angle)
+            result = self.solver.solve()
+            total += result.iterations
+            if not result.converged:
+                return SolveResult(False, total, result.reason, result.residual_norm)
+            rates, curvatures = self.root_rates(rotor.new_angle)
+            forces = self.solver.free_residuals()
+            inertia, tape = rotor.inertia_torque(), self._dot(rates, forces)
+            phi = inertia + tape
+            if abs(phi) <= max(self.rtol * max(abs(inertia), abs(tape)), self.floor * self.moment_scale):
+                return SolveResult(True, total, result.reason, result.residual_norm)
+            action = self._action(rates)
+            w = self._response(rates, action)
+            slope = rotor.inertia_stiffness() + self._dot(curvatures, forces) + self._dot(action, w)
+            if not (np.isfinite(slope) and slope > 0):
+                break
+            change = -phi / slope
+            if abs(change) <= self.angle_round_off * max(1.0, abs(rotor.new_angle)):
+                # a hub far heavier than the tape: phi's tolerance is finer than the angle's
+                # round-off times the hub's stiffness J (1 - alpha_m) / (beta dt^2)
+                return SolveResult(True, total, result.reason, result.residual_norm)
+            self.iterations += 1
+            rotor.new_angle += change
+            self._move_states([change * x for x in w])
+        reason = int(PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)
+        return SolveResult(False, total, reason, result.residual_norm if result is not None else np.inf)
