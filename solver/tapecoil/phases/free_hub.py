@@ -46,16 +46,73 @@ from tapecoil.core.newton import SolveResult
 from tapecoil.hub.rotor import HubRotor
 
 
-class FreeHubCoupling:
+class HubNewton:
+    """Newton's method on a free hub's angle around the tape's solve (see the module): each
+    trial angle is a tape solve with the root held there, then the hub's equation phi; the
+    step -phi / phi' carries the tape along by its first-order response. A coupling supplies
+    ``rotor`` and ``moment_scale`` [N m] (a torque below ``floor`` times it is round-off), and
+    :meth:`place`, :meth:`tape_solve`, :meth:`balance`, :meth:`tangent` and :meth:`carry`."""
+
+    max_iterations = 10
+    # phi converged: this fraction of the torques in balance, or of the tape's section moment
+    rtol, floor = 1e-7, 1e-9
+    angle_round_off = 1e-14  # [-]: a change of angle below this relative size changes nothing
+
+    def place(self, angle: float) -> None:
+        """The root (and what turns with the hub) at the hub angle ``angle`` [rad]."""
+        raise NotImplementedError
+
+    def tape_solve(self) -> SolveResult:
+        """The tape's solve with the root where it is placed."""
+        raise NotImplementedError
+
+    def balance(self, angle: float) -> tuple[float, float]:
+        """phi at the solved state and ``angle``, and the size of the torques it balances [N m]."""
+        raise NotImplementedError
+
+    def tangent(self) -> tuple[float, object]:
+        """dphi/dzeta along the tape's equilibria and the tape's response w, after
+        :meth:`balance` at the same state."""
+        raise NotImplementedError
+
+    def carry(self, change: float, response) -> None:
+        """Move the tape by ``change`` times its response."""
+        raise NotImplementedError
+
+    def solve(self) -> SolveResult:
+        """The step's tape and hub solved together from the predicted state and angle."""
+        rotor = self.rotor
+        total, result = 0, None
+        for _ in range(self.max_iterations):
+            self.place(rotor.new_angle)
+            result = self.tape_solve()
+            total += result.iterations
+            if not result.converged:
+                return SolveResult(False, total, result.reason, result.residual_norm)
+            phi, size = self.balance(rotor.new_angle)
+            if abs(phi) <= max(self.rtol * size, self.floor * self.moment_scale):
+                return SolveResult(True, total, result.reason, result.residual_norm)
+            slope, response = self.tangent()
+            if not (np.isfinite(slope) and slope > 0):
+                break
+            change = -phi / slope
+            if abs(change) <= self.angle_round_off * max(1.0, abs(rotor.new_angle)):
+                # a hub far heavier than the tape: phi's tolerance is finer than the angle's
+                # round-off times the hub's stiffness J (1 - alpha_m) / (beta dt^2)
+                return SolveResult(True, total, result.reason, result.residual_norm)
+            self.iterations += 1
+            rotor.new_angle += change
+            self.carry(change, response)
+        reason = int(PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)
+        return SolveResult(False, total, reason, result.residual_norm if result is not None else np.inf)
+
+
+class FreeHubCoupling(HubNewton):
     """The hub's and the tape's equations of a :class:`~tapecoil.phases.deployment.DeploymentModel`
     solved together (see the module docstring); ``jacobian`` is the UFL Jacobian of the tape's
     solver."""
 
     angle_step = 1e-4  # [rad]: the central differences of the root's prescribed dofs
-    max_iterations = 10
-    # phi converged: this fraction of the torques in balance, or of the tape's section moment
-    rtol, floor = 1e-7, 1e-9
-    angle_round_off = 1e-14  # [-]: a change of angle below this relative size changes nothing
 
     def __init__(self, model, rotor: HubRotor, jacobian):
         self.m, self.rotor = model, rotor
@@ -143,33 +200,18 @@ class FreeHubCoupling:
         )
         return value, w
 
-    def solve(self) -> SolveResult:
-        """The step's tape and hub solved together from the predicted state and angle."""
-        rotor, q = self.rotor, self.m.model.q
-        total = 0
-        self.place(rotor.new_angle)
-        for _ in range(self.max_iterations):
-            result = self.solver.solve()
-            total += result.iterations
-            if not result.converged:
-                return SolveResult(False, total, result.reason, result.residual_norm)
-            rates, curvature = self.root_rates(rotor.new_angle)
-            phi, size = self.residual(rates, rotor.new_angle)
-            if abs(phi) <= max(self.rtol * size, self.floor * self.moment_scale):
-                return SolveResult(True, total, result.reason, result.residual_norm)
-            slope, w = self.slope(rates, curvature)
-            if not (np.isfinite(slope) and slope > 0):
-                break
-            change = -phi / slope
-            if abs(change) <= self.angle_round_off * max(1.0, abs(rotor.new_angle)):
-                # a hub far heavier than the tape: phi's tolerance is finer than the angle's
-                # round-off times the hub's stiffness J (1 - alpha_m) / (beta dt^2)
-                return SolveResult(True, total, result.reason, result.residual_norm)
-            self.iterations += 1
-            rotor.new_angle += change
-            q.x.array[: self._n] += change * w
-            q.x.scatter_forward()
-            self.place(rotor.new_angle)
-        return SolveResult(
-            False, total, int(PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT), result.residual_norm
-        )
+    # -- the hooks of HubNewton
+    def tape_solve(self) -> SolveResult:
+        return self.solver.solve()
+
+    def balance(self, angle: float) -> tuple[float, float]:
+        self._rates = self.root_rates(angle)
+        return self.residual(self._rates[0], angle)
+
+    def tangent(self) -> tuple[float, np.ndarray]:
+        return self.slope(*self._rates)
+
+    def carry(self, change: float, response: np.ndarray) -> None:
+        q = self.m.model.q
+        q.x.array[: self._n] += change * response
+        q.x.scatter_forward()

@@ -17,12 +17,12 @@ the hub exerts on the tape. The spiral of turns is read from the winding angles,
 material's, and puts no torque on the hub.
 
 Each trial angle is a joint solve of shell and beam with the root held at g(zeta). phi is
-solved by Newton's method with its total derivative along the tape's equilibria, as the full
-shell's: to first order a change of angle moves the tape by w dzeta, with A w = [-(K G) on the
-free dofs, G on the root's], A the joint Jacobian the last Newton iteration factorised (the
-root's rows the identity) and K G the action of the Jacobian without conditions, here the
-central difference of the free residual along G (two residuals, where the full shell
-assembles the action's form), and
+solved by Newton's method with its total derivative along the tape's equilibria, the full
+shell's iteration (:class:`~tapecoil.phases.free_hub.HubNewton`): to first order a change of
+angle moves the tape by w dzeta, with A w = [-(K G) on the free dofs, G on the root's], A the
+joint Jacobian the last Newton iteration factorised (the root's rows the identity) and K G the
+action of the Jacobian without conditions, here the central difference of the free residual
+along G (two residuals, where the full shell assembles the action's form), and
 
     dphi/dzeta = J (1 - alpha_m) / (beta dt^2) + G' . F + (K G) . w,
 
@@ -37,15 +37,15 @@ from __future__ import annotations
 
 import dolfinx.fem.petsc
 import numpy as np
-from petsc4py import PETSc
 
 from tapecoil.core.dofs import owned_constrained_dofs
 from tapecoil.core.newton import SolveResult
+from tapecoil.phases.free_hub import HubNewton
 
 __all__ = ["HybridFreeHub"]
 
 
-class HybridFreeHub:
+class HybridFreeHub(HubNewton):
     """The hub's equation and a :class:`~tapecoil.phases.hybrid_motion.HybridMotion`'s solved
     together (see the module): ``rotor`` the hub, ``moment_scale`` [N m] the size below which a
     torque is round-off (the section's bending moment at 1/R)."""
@@ -54,10 +54,6 @@ class HybridFreeHub:
     # [rad]: the central difference of the free residual along G (the root moved by about
     # 1e-8 m: its truncation and rounding both far below the tangent's use, a predictor)
     action_step = 1e-6
-    max_iterations = 10
-    # phi converged: this fraction of the torques in balance, or of the section's moment
-    rtol, floor = 1e-7, 1e-9
-    angle_round_off = 1e-14  # [-]: a change of angle below this relative size changes nothing
 
     def __init__(self, motion, rotor, moment_scale: float):
         self.motion, self.rotor, self.moment_scale = motion, rotor, moment_scale
@@ -139,34 +135,23 @@ class HybridFreeHub:
         w.destroy()
         return out
 
-    def solve(self) -> SolveResult:
-        """The step's shell, beam and hub solved together from the predicted state and angle."""
-        rotor = self.rotor
-        total, result = 0, None
-        for _ in range(self.max_iterations):
-            self.place(rotor.new_angle)
-            result = self.solver.solve()
-            total += result.iterations
-            if not result.converged:
-                return SolveResult(False, total, result.reason, result.residual_norm)
-            rates, curvatures = self.root_rates(rotor.new_angle)
-            forces = self.solver.free_residuals()
-            inertia, tape = rotor.inertia_torque(), self._dot(rates, forces)
-            phi = inertia + tape
-            if abs(phi) <= max(self.rtol * max(abs(inertia), abs(tape)), self.floor * self.moment_scale):
-                return SolveResult(True, total, result.reason, result.residual_norm)
-            action = self._action(rates)
-            w = self._response(rates, action)
-            slope = rotor.inertia_stiffness() + self._dot(curvatures, forces) + self._dot(action, w)
-            if not (np.isfinite(slope) and slope > 0):
-                break
-            change = -phi / slope
-            if abs(change) <= self.angle_round_off * max(1.0, abs(rotor.new_angle)):
-                # a hub far heavier than the tape: phi's tolerance is finer than the angle's
-                # round-off times the hub's stiffness J (1 - alpha_m) / (beta dt^2)
-                return SolveResult(True, total, result.reason, result.residual_norm)
-            self.iterations += 1
-            rotor.new_angle += change
-            self._move_states([change * x for x in w])
-        reason = int(PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)
-        return SolveResult(False, total, reason, result.residual_norm if result is not None else np.inf)
+    # -- the hooks of HubNewton
+    def tape_solve(self) -> SolveResult:
+        return self.solver.solve()
+
+    def balance(self, angle: float) -> tuple[float, float]:
+        self._rates, self._curvatures = self.root_rates(angle)
+        self._forces = self.solver.free_residuals()
+        inertia, tape = self.rotor.inertia_torque(), self._dot(self._rates, self._forces)
+        return inertia + tape, max(abs(inertia), abs(tape))
+
+    def tangent(self) -> tuple[float, list[np.ndarray]]:
+        action = self._action(self._rates)
+        w = self._response(self._rates, action)
+        slope = (
+            self.rotor.inertia_stiffness() + self._dot(self._curvatures, self._forces) + self._dot(action, w)
+        )
+        return slope, w
+
+    def carry(self, change: float, response: list[np.ndarray]) -> None:
+        self._move_states([change * x for x in response])
