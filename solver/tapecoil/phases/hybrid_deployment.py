@@ -168,8 +168,8 @@ class HybridDeployment:
 
     ``config``: the deployment's configuration, by default the coiling's. It may differ from
     the coiling's in its [deployment] table, ``hub.inertia`` and ``model.window_release``, which
-    act from the release on, so that one coiled tape deploys under several settings; the coiling is left as
-    it was."""
+    act from the release on, so that one coiled tape deploys under several settings; the
+    coiling is left as it was."""
 
     def __init__(self, coiling, config=None):
         self.coiling = coiling

@@ -94,7 +94,8 @@ class HybridDeploymentMeasures:
 
     def angular_momentum(self) -> float:
         """The angular momentum of shell and beam about the hub's axis [kg m^2/s], from the last
-        converged rates (collective): the hub held, the root's torque changes it."""
+        converged rates (collective): the tape's alone, which the root's torque changes (a free
+        hub's own is its rotor's)."""
         frame = self.frame
         momentum, spin = np.split(self.motion.beam.momenta(), 2)  # the beam's, about the origin
         beam = np.dot(frame.axis, spin - np.cross(frame.axis_point, momentum))
