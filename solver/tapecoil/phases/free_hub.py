@@ -46,6 +46,13 @@ from tapecoil.core.newton import SolveResult
 from tapecoil.hub.rotor import HubRotor
 
 
+def section_moment(config) -> float:
+    """The tape section's bending moment at the curvature 1/R [N m], D11 b / R: the size of the
+    torques a free hub's equation balances, below a fraction of which a torque is round-off."""
+    tp = config.tape
+    return config.wall.bending.D11 * tp.b / tp.R
+
+
 class HubNewton:
     """Newton's method on a free hub's angle around the tape's solve (see the module): each
     trial angle is a tape solve with the root held there, then the hub's equation phi; the
@@ -53,6 +60,7 @@ class HubNewton:
     ``rotor`` and ``moment_scale`` [N m] (a torque below ``floor`` times it is round-off), and
     :meth:`place`, :meth:`tape_solve`, :meth:`balance`, :meth:`tangent` and :meth:`carry`."""
 
+    angle_step = 1e-4  # [rad]: the central differences of the root's prescribed dofs
     max_iterations = 10
     # phi converged: this fraction of the torques in balance, or of the tape's section moment
     rtol, floor = 1e-7, 1e-9
@@ -112,8 +120,6 @@ class FreeHubCoupling(HubNewton):
     solved together (see the module docstring); ``jacobian`` is the UFL Jacobian of the tape's
     solver."""
 
-    angle_step = 1e-4  # [rad]: the central differences of the root's prescribed dofs
-
     def __init__(self, model, rotor: HubRotor, jacobian):
         self.m, self.rotor = model, rotor
         W = model.model.W
@@ -124,10 +130,7 @@ class FreeHubCoupling(HubNewton):
         self._w = compat.create_vector(W)
         self._held = owned_constrained_dofs(W, model.bcs)
         self._n = self._vec.getLocalSize()
-        tp = model.config.tape
-        self.moment_scale = (
-            model.config.wall.bending.D11 * tp.b / tp.R
-        )  # [N m]: the section's bending moment at 1/R
+        self.moment_scale = section_moment(model.config)
         self.iterations = 0  # hub Newton steps over the run (on every rank)
 
     def place(self, angle: float) -> None:

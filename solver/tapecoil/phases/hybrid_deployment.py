@@ -75,6 +75,7 @@ from tapecoil.models.nodes import Nodes
 from tapecoil.models.window import carry_over
 from tapecoil.models.window_motion import carry_motion
 from tapecoil.models.window_settling import settle_at_rest, settle_placed
+from tapecoil.phases.free_hub import section_moment
 from tapecoil.phases.hybrid_deployment_measures import HybridDeploymentMeasures, coiled_along
 from tapecoil.phases.hybrid_free_hub import HybridFreeHub
 from tapecoil.phases.hybrid_motion import HybridMotion
@@ -274,9 +275,7 @@ class HybridDeployment:
 
     def _free_hub(self, motion) -> HybridFreeHub:
         """The free hub's equation solved with ``motion``'s."""
-        tp = self.config.tape
-        scale = self.config.wall.bending.D11 * tp.b / tp.R  # [N m]: the section's moment at 1/R
-        return HybridFreeHub(motion, self.rotor, scale)
+        return HybridFreeHub(motion, self.rotor, section_moment(self.config))
 
     # -- stepping -------------------------------------------------------------------------------
     def step_error(self) -> float:

@@ -50,7 +50,6 @@ class HybridFreeHub(HubNewton):
     together (see the module): ``rotor`` the hub, ``moment_scale`` [N m] the size below which a
     torque is round-off (the section's bending moment at 1/R)."""
 
-    angle_step = 1e-4  # [rad]: the central differences of the root's prescribed dofs
     # [rad]: the central difference of the free residual along G (the root moved by about
     # 1e-8 m: its truncation and rounding both far below the tangent's use, a predictor)
     action_step = 1e-6
