@@ -58,7 +58,8 @@ class HubNewton:
     trial angle is a tape solve with the root held there, then the hub's equation phi; the
     step -phi / phi' carries the tape along by its first-order response. A coupling supplies
     ``rotor`` and ``moment_scale`` [N m] (a torque below ``floor`` times it is round-off), and
-    :meth:`place`, :meth:`tape_solve`, :meth:`balance`, :meth:`tangent` and :meth:`carry`."""
+    :meth:`place`, :meth:`_prescribed`, :meth:`tape_solve`, :meth:`balance`, :meth:`tangent`
+    and :meth:`carry`."""
 
     angle_step = 1e-4  # [rad]: the central differences of the root's prescribed dofs
     max_iterations = 10
@@ -69,6 +70,18 @@ class HubNewton:
     def place(self, angle: float) -> None:
         """The root (and what turns with the hub) at the hub angle ``angle`` [rad]."""
         raise NotImplementedError
+
+    def _prescribed(self, angle: float) -> np.ndarray:
+        """The root placed at ``angle`` [rad], the values its conditions prescribe on the owned
+        dofs (zero elsewhere)."""
+        raise NotImplementedError
+
+    def root_rates(self, angle: float) -> tuple[np.ndarray, np.ndarray]:
+        """G and G' at ``angle`` on the owned dofs (zero off the root), central differences over
+        ``angle_step``; the root left at ``angle``."""
+        e = self.angle_step
+        plus, minus, here = self._prescribed(angle + e), self._prescribed(angle - e), self._prescribed(angle)
+        return (plus - minus) / (2 * e), (plus - 2 * here + minus) / e**2
 
     def tape_solve(self) -> SolveResult:
         """The tape's solve with the root where it is placed."""
@@ -144,12 +157,6 @@ class FreeHubCoupling(HubNewton):
             local.set(0.0)
         dolfinx.fem.petsc.set_bc(self._vec, self.m.bcs)
         return self._vec.array.copy()
-
-    def root_rates(self, angle: float) -> tuple[np.ndarray, np.ndarray]:
-        """G and G' at ``angle`` on the owned dofs (zero off the root); the root left at ``angle``."""
-        e = self.angle_step
-        plus, minus, here = self._prescribed(angle + e), self._prescribed(angle - e), self._prescribed(angle)
-        return (plus - minus) / (2 * e), (plus - 2 * here + minus) / e**2
 
     def _assemble(self, form) -> PETSc.Vec:
         with self._vec.localForm() as local:

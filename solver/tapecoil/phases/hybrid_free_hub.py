@@ -38,7 +38,7 @@ from __future__ import annotations
 import dolfinx.fem.petsc
 import numpy as np
 
-from tapecoil.core.dofs import owned_constrained_dofs
+from tapecoil.core.dofs import owned_constrained_dofs, owned_size
 from tapecoil.core.newton import SolveResult
 from tapecoil.phases.free_hub import HubNewton
 
@@ -58,14 +58,22 @@ class HybridFreeHub(HubNewton):
         self.motion, self.rotor, self.moment_scale = motion, rotor, moment_scale
         self.hybrid, self.solver = motion.hybrid, motion.solver
         self.comm = self.hybrid.shell.comm
-        self._held = [owned_constrained_dofs(blk.q.function_space, blk.bcs) for blk in self.solver.blocks]
+        spaces = [blk.q.function_space for blk in self.solver.blocks]
+        self._held = [
+            owned_constrained_dofs(V, blk.bcs) for V, blk in zip(spaces, self.solver.blocks, strict=True)
+        ]
+        self._sizes = [owned_size(V) for V in spaces]
         self.iterations = 0  # the hub's Newton steps over the run
 
     def place(self, angle: float) -> None:
         """The root (the beam's clamp or the window's attachment) at the hub angle ``angle``."""
         self.hybrid._set_load(angle)
 
-    def _prescribed(self, angle: float) -> list[np.ndarray]:
+    def _blocks(self, values: np.ndarray) -> list[np.ndarray]:
+        """``values`` over the owned dofs of shell and beam, one after the other, split by block."""
+        return np.split(values, [self._sizes[0]])
+
+    def _prescribed(self, angle: float) -> np.ndarray:
         self.place(angle)
         out = []
         for blk, b in zip(self.solver.blocks, self.solver.b, strict=True):
@@ -73,25 +81,19 @@ class HybridFreeHub(HubNewton):
                 local.set(0.0)
             dolfinx.fem.petsc.set_bc(b, blk.bcs)
             out.append(b.array_r.copy())
-        return out
+        return np.concatenate(out)
 
-    def root_rates(self, angle: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
-        """G and G' at ``angle``: each block's rates of its prescribed owned dofs (zero off the
-        held dofs); the root left at ``angle``."""
-        e = self.angle_step
-        plus, minus, here = self._prescribed(angle + e), self._prescribed(angle - e), self._prescribed(angle)
-        rates = [(p - m) / (2 * e) for p, m in zip(plus, minus, strict=True)]
-        curvatures = [(p - 2 * h + m) / e**2 for p, h, m in zip(plus, here, minus, strict=True)]
-        return rates, curvatures
+    def _free_residual(self) -> np.ndarray:
+        return np.concatenate(self.solver.free_residuals())
 
-    def _dot(self, a: list[np.ndarray], b: list[np.ndarray]) -> float:
-        return self.comm.allreduce(sum(float(x @ y) for x, y in zip(a, b, strict=True)))
+    def _dot(self, a: np.ndarray, b: np.ndarray) -> float:
+        return self.comm.allreduce(float(a @ b))
 
     def torque(self, angle: float) -> float:
         """G . F [N m] at the present states, the root at ``angle`` (collective): the torque the
         hub exerts on the tape at the levels of the tape's equations."""
         rates, _ = self.root_rates(angle)
-        return self._dot(rates, self.solver.free_residuals())
+        return self._dot(rates, self._free_residual())
 
     def start(self) -> None:
         """At release, at rest: the hub's acceleration under the torque that the tape held it
@@ -100,26 +102,27 @@ class HybridFreeHub(HubNewton):
         if rotor.inertia > 0:
             rotor.acceleration = -self.torque(rotor.angle) / rotor.inertia
 
-    def _move_states(self, change: list[np.ndarray]) -> None:
-        for blk, dq in zip(self.solver.blocks, change, strict=True):
+    def _move_states(self, change: np.ndarray) -> None:
+        for blk, dq in zip(self.solver.blocks, self._blocks(change), strict=True):
             blk.q.x.array[: dq.size] += dq
             blk.q.x.scatter_forward()
 
-    def _action(self, rates: list[np.ndarray]) -> list[np.ndarray]:
-        """K G: the free residual's central difference along G (owned arrays; collective)."""
+    def _action(self, rates: np.ndarray) -> np.ndarray:
+        """K G: the free residual's central difference along G (owned; collective)."""
         e = self.action_step
-        self._move_states([e * g for g in rates])
-        plus = self.solver.free_residuals()
-        self._move_states([-2 * e * g for g in rates])
-        minus = self.solver.free_residuals()
-        self._move_states([e * g for g in rates])
-        return [(p - m) / (2 * e) for p, m in zip(plus, minus, strict=True)]
+        self._move_states(e * rates)
+        plus = self._free_residual()
+        self._move_states(-2 * e * rates)
+        minus = self._free_residual()
+        self._move_states(e * rates)
+        return (plus - minus) / (2 * e)
 
-    def _response(self, rates: list[np.ndarray], action: list[np.ndarray]) -> list[np.ndarray]:
+    def _response(self, rates: np.ndarray, action: np.ndarray) -> np.ndarray:
         """w: A w = [-(K G) free, G held], by the joint solver's factorisation (collective)."""
         solver = self.solver
         rhs, w = solver.r.duplicate(), solver.x.duplicate()
-        for iset, g, kg, held in zip(solver.index_sets, rates, action, self._held, strict=True):
+        parts = zip(solver.index_sets, self._blocks(rates), self._blocks(action), self._held, strict=True)
+        for iset, g, kg, held in parts:
             sub = rhs.getSubVector(iset)
             sub.array[:] = -kg
             sub.array[held] = g[held]
@@ -132,7 +135,7 @@ class HybridFreeHub(HubNewton):
             w.restoreSubVector(iset, sub)
         rhs.destroy()
         w.destroy()
-        return out
+        return np.concatenate(out)
 
     # -- the hooks of HubNewton
     def tape_solve(self) -> SolveResult:
@@ -140,11 +143,11 @@ class HybridFreeHub(HubNewton):
 
     def balance(self, angle: float) -> tuple[float, float]:
         self._rates, self._curvatures = self.root_rates(angle)
-        self._forces = self.solver.free_residuals()
+        self._forces = self._free_residual()
         inertia, tape = self.rotor.inertia_torque(), self._dot(self._rates, self._forces)
         return inertia + tape, max(abs(inertia), abs(tape))
 
-    def tangent(self) -> tuple[float, list[np.ndarray]]:
+    def tangent(self) -> tuple[float, np.ndarray]:
         action = self._action(self._rates)
         w = self._response(self._rates, action)
         slope = (
@@ -152,5 +155,5 @@ class HybridFreeHub(HubNewton):
         )
         return slope, w
 
-    def carry(self, change: float, response: list[np.ndarray]) -> None:
-        self._move_states([change * x for x in response])
+    def carry(self, change: float, response: np.ndarray) -> None:
+        self._move_states(change * response)
