@@ -254,3 +254,87 @@ def test_the_beam_contact_key_reaches_the_window_settings():
     assert WindowSettings.from_config(Config().model).beam_contact == "width"
     with pytest.raises(ConfigError, match="beam_contact"):
         config_from_dict({"model": {"kind": "hybrid", "beam_contact": "edges"}})
+
+
+class StopAfter:
+    """A stop request after ``rows`` converged steps, as a signal would make it (the runner's
+    :class:`~tapecoil.core.interrupt.StopSignals` check)."""
+
+    def __init__(self, rows: int):
+        self.rows, self.seen = rows, 0
+
+    def check(self, comm=None) -> None:
+        import signal
+
+        from tapecoil.core.interrupt import Interrupted
+
+        self.seen += 1
+        if self.seen >= self.rows:
+            raise Interrupted(signal.SIGTERM)
+
+
+def hybrid_run_config(angle: float) -> Config:
+    config = coarse(angle)
+    return dataclasses.replace(
+        config,
+        model=dataclasses.replace(config.model, kind="hybrid"),
+        output=dataclasses.replace(config.output, report=False, checkpoint_every=7),
+    )
+
+
+def test_a_stopped_hybrid_coiling_goes_on_from_its_checkpoint_as_if_never_stopped(tmp_path):
+    """The coarse tape's coiling to 4.5 rad by the hybrid in a run, stopped after 60 steps (past
+    the window's move off the root at 3.9 rad, in the middle of a leg between moves) and resumed
+    from its checkpoint: every step is the uninterrupted coiling's to 1e-12 (hub angle, step,
+    window, lift-off, strain energy, Newton iterations: the state restored is the state left),
+    and the history has a row for each. A completed coiling's checkpoint gives back the hybrid's
+    own coil (which the deployment starts from) without coiling again."""
+    import csv
+
+    from tapecoil.core.checkpoint import read_meta, read_tables
+    from tapecoil.phases.hybrid_coiling_run import run_hybrid_coiling
+
+    config = hybrid_run_config(4.5)
+    comm = MPI.COMM_WORLD
+    stopped, _, _ = run_hybrid_coiling(config, tmp_path, comm, progress=False, stop=StopAfter(60))
+    assert stopped["interrupted"] == "SIGTERM" and not stopped["completed"]
+    checkpoint = tmp_path / "stowed"
+    assert read_meta(checkpoint)["run"]["coiling"]["leg"] is not None and read_tables(checkpoint)
+    resumed, _, coil = run_hybrid_coiling(config, tmp_path, comm, resume=checkpoint, progress=False)
+    direct = coiled(comm, 4.5)  # the same coiling, never stopped
+    assert resumed["completed"] and coil.moves == direct.moves and len(coil.moves) == 2
+    assert len(coil.records) == len(direct.records)
+    for mine, theirs in zip(coil.records, direct.records, strict=True):
+        for key in ("hub_angle", "step", "lift_off", "strain_energy", "iterations"):
+            assert getattr(mine, key) == pytest.approx(getattr(theirs, key), rel=1e-12), key
+        assert mine.window == theirs.window
+    rows = list(csv.DictReader((tmp_path / "coiling_history.csv").open()))
+    assert len(rows) == len(direct.records) + 1  # and the flattening's
+    assert [float(r["hub_angle"]) for r in rows[1:]] == pytest.approx([r.hub_angle for r in direct.records])
+
+    _, _, again = run_hybrid_coiling(config, tmp_path, comm, resume=checkpoint, progress=False)
+    assert again is not None and again.angle == pytest.approx(4.5)
+    assert again.strain_energy() == pytest.approx(direct.strain_energy(), rel=1e-12)
+
+
+@pytest.mark.mpi
+def test_a_hybrid_coiling_stopped_on_two_ranks_goes_on_on_one(tmp_path):
+    """The coarse tape's hybrid coiling stopped on 2 ranks after 60 steps and resumed from that
+    checkpoint on each rank alone ends where the uninterrupted 2-rank coiling does: the same
+    windows, the same strain energy and lift-off (1e-9, as 2 ranks against 1 above)."""
+    import shutil
+    from pathlib import Path
+
+    from tapecoil.phases.hybrid_coiling_run import run_hybrid_coiling
+
+    world = MPI.COMM_WORLD
+    config = hybrid_run_config(4.5)
+    shared = Path(world.bcast(str(tmp_path), root=0)) / "run"
+    run_hybrid_coiling(config, shared, world, progress=False, stop=StopAfter(60))
+    own = tmp_path / f"rank{world.rank}"
+    shutil.copytree(shared / "stowed", own / "stowed")
+    resumed, _, coil = run_hybrid_coiling(config, own, MPI.COMM_SELF, resume=own / "stowed", progress=False)
+    direct = coiled(world, 4.5)
+    assert resumed["completed"] and coil.moves == direct.moves
+    assert coil.strain_energy() == pytest.approx(direct.strain_energy(), rel=1e-9)
+    assert abs(coil.lift_off() - direct.lift_off()) < 1e-9 * 0.5

@@ -1,9 +1,11 @@
 """Checkpoints: everything a run needs to continue, written atomically with adios4dolfinx.
 
 A checkpoint is a directory holding ``state.bp`` (ADIOS2: the mesh, its tags and named
-functions, readable on any number of ranks) and ``meta.json`` (the scalars and the history so
-far). It is first written beside its place as ``<name>.partial`` and then renamed onto it, so a
-run killed while writing keeps its previous checkpoint.
+functions, readable on any number of ranks), ``meta.json`` (the scalars and the history so
+far) and, for a model with state on meshes it builds again, ``tables.npz`` (that state cell by
+cell in the meshes' input order, :mod:`tapecoil.core.cell_state`). It is first written beside
+its place as ``<name>.partial`` and then renamed onto it, so a run killed while writing keeps
+its previous checkpoint.
 """
 
 from __future__ import annotations
@@ -18,9 +20,12 @@ import numpy as np
 from tapecoil.core import compat
 
 
-def write_checkpoint(path: str | Path, mesh, tags: dict, functions: dict, meta: dict, comm) -> None:
+def write_checkpoint(
+    path: str | Path, mesh, tags: dict, functions: dict, meta: dict, comm, tables: dict | None = None
+) -> None:
     """Write ``mesh`` with its ``tags`` (name -> MeshTags), ``functions`` (name -> Function on the
-    mesh) and ``meta`` (JSON-ready) to the directory ``path`` (collective)."""
+    mesh), ``meta`` (JSON-ready) and ``tables`` (name -> array, rank 0's are written) to the
+    directory ``path`` (collective)."""
     import adios4dolfinx
 
     path = Path(path)
@@ -37,6 +42,8 @@ def write_checkpoint(path: str | Path, mesh, tags: dict, functions: dict, meta: 
         adios4dolfinx.write_function(bp, function, name=name)
     if comm.rank == 0:
         (partial / "meta.json").write_text(json.dumps(meta, indent=1, default=_json_default))
+        if tables:
+            np.savez(partial / "tables.npz", **tables)
         old = path.with_name(path.name + ".old")
         if path.exists():
             path.rename(old)
@@ -54,6 +61,15 @@ def _json_default(value):
 def read_meta(path: str | Path) -> dict:
     """The checkpoint's meta.json."""
     return json.loads((Path(path) / "meta.json").read_text())
+
+
+def read_tables(path: str | Path) -> dict[str, np.ndarray] | None:
+    """The checkpoint's tables (every rank reads them), or None when it has none."""
+    file = Path(path) / "tables.npz"
+    if not file.is_file():
+        return None
+    with np.load(file) as data:
+        return {name: data[name] for name in data.files}
 
 
 def is_checkpoint(path: str | Path) -> bool:

@@ -311,6 +311,24 @@ class GeometricallyExactBeam:
         self.q.x.array[self._theta_dofs] = 0.0
         self.q.x.scatter_forward()
 
+    def state_fields(self) -> dict:
+        """The state an accepted step leaves, as :class:`~tapecoil.core.cell_state.CellField`
+        views: ``q`` (its rotation increment zero), the committed frames and curvatures at the
+        quadrature points and the nodes' frames (a restart's)."""
+        from tapecoil.core.cell_state import CellField, function_field
+
+        # the node arrays are indexed like the collapsed subspace's dofs they were built from
+        space, _ = compat.collapse(self.W.sub(0).sub(0))
+        self.node_frames = np.ascontiguousarray(self.node_frames)
+        return {
+            "q": function_field(self.q),
+            "frame_n": function_field(self.frame_n),
+            "curvature_n": function_field(self.curvature_n),
+            "node_frames": CellField(
+                self.mesh, np.asarray(space.dofmap.list), self.node_frames.reshape(-1, 9)
+            ),
+        }
+
     def strain_energy(self) -> float:
         """The beam's strain energy [J] (collective)."""
         if getattr(self, "_energy_form", None) is None:

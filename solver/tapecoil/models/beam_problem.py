@@ -260,6 +260,26 @@ class BeamProblem:
             psi.x.array[:] = estimate(nodes[:, 0])
             update()
 
+    def state_fields(self) -> dict:
+        """The beam's state fields (:meth:`GeometricallyExactBeam.state_fields`) and its winding
+        contacts' angles, as cell fields."""
+        from tapecoil.core.cell_state import function_field
+
+        fields = {f"model/{name}": field for name, field in self.model.state_fields().items()}
+        for i, (psi, _, _) in enumerate(self._winding_angles):
+            fields[f"winding{i}"] = function_field(psi)
+        return fields
+
+    def state_values(self) -> dict:
+        """The scalars of the state: the accepted load parameter and the natural curvatures' share."""
+        return {"committed_load": self.committed_load, "natural_share": float(self.model.natural_share.value)}
+
+    def set_state_values(self, values: dict) -> None:
+        """Put back :meth:`state_values` (after the fields), the loads set to the accepted one."""
+        self.committed_load = float(values["committed_load"])
+        self.model.natural_share.value = float(values["natural_share"])
+        self._set_load(self.committed_load)
+
     def forms(self) -> tuple:
         """The residual and Jacobian (UFL) of the beam's energy and the energies beside it."""
         model = self.model

@@ -21,7 +21,10 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from tapecoil.config import SolverConfig
+from tapecoil.core.cell_state import gather_fields, scatter_fields
 from tapecoil.core.coupled_newton import Block, CoupledSNESSolver, CouplingGroup, JointState
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.stepping import Continuation, Relaxation, StepRecord
@@ -85,6 +88,35 @@ class HybridProblem:
             + self.beam.model.strain_energy()
             + self.coupling.energy()
         )
+
+    # -- restart -------------------------------------------------------------------------------
+    def _parts(self) -> dict:
+        return {"shell": self.shell, "beam": self.beam, **{f"tie_{e}": tie for e, tie in self.ties.items()}}
+
+    def state_tables(self) -> dict[str, np.ndarray]:
+        """The state an accepted step leaves, shell, beam and ties, as tables that a hybrid of the
+        same tape and window built again on any number of ranks takes back (:meth:`set_state`;
+        :mod:`tapecoil.core.cell_state`): rank 0's hold it all, the others' are empty
+        (collective)."""
+        fields = {
+            f"field:{p}:{n}": field
+            for p, part in self._parts().items()
+            for n, field in part.state_fields().items()
+        }
+        tables = gather_fields(fields, self.shell.strip.mesh.comm)
+        for p, part in self._parts().items():
+            for n, value in part.state_values().items():
+                tables[f"value:{p}:{n}"] = np.asarray(value, dtype=float)
+        return tables if self.shell.strip.mesh.comm.rank == 0 else {}
+
+    def set_state(self, tables: dict[str, np.ndarray]) -> None:
+        """Take the state of :meth:`state_tables` (every rank holding all of them; rank-local)."""
+        for p, part in self._parts().items():
+            fields = {f"field:{p}:{n}": field for n, field in part.state_fields().items()}
+            scatter_fields(fields, tables)
+            prefix = f"value:{p}:"
+            part.set_state_values({k[len(prefix) :]: v for k, v in tables.items() if k.startswith(prefix)})
+        self._set_load(self.beam.committed_load)
 
     def flatten(self, edge: str) -> None:
         """Flatten the flat tie at ``edge`` with the load parameter: its section goes from the arc
@@ -162,10 +194,10 @@ class HybridProblem:
         ``max_cutbacks`` cut-backs have not passed a snap; None: none."""
         start = self.beam.committed_load
         span = load - start
-        if span == 0 or not 0 < first_step <= max_step <= abs(span):
+        if span == 0 or not (0 < first_step <= max_step and first_step <= abs(span)):
             raise ValueError(
                 f"hybrid solve: steps must satisfy 0 < first_step ({first_step}) <= max_step "
-                f"({max_step}) <= |load - start| ({abs(span)})"
+                f"({max_step}) and first_step <= |load - start| ({abs(span)})"
             )
         settings = solver_config or SolverConfig()
         F_s, J_s = self.shell.forms()

@@ -177,6 +177,23 @@ class RigidSectionTie:
         R = rotation_matrices(np.array(self.coupling.c.value[3:6]))[0]
         self.turned.value[:] = R @ np.asarray(self.turned.value)
 
+    def state_fields(self) -> dict:
+        """The kept shape of the edge, as cell fields (a restart's)."""
+        from tapecoil.core.cell_state import function_field
+
+        return {
+            "kept_offset": function_field(self.kept_offset),
+            "kept_normal": function_field(self.kept_normal),
+        }
+
+    def state_values(self) -> dict:
+        """The end's accepted rotation Q_n and the section's flatness."""
+        return {"turned": np.array(self.turned.value, dtype=float), "flatness": float(self.flatness.value)}
+
+    def set_state_values(self, values: dict) -> None:
+        self.turned.value[:] = np.asarray(values["turned"], dtype=float)
+        self.flatness.value = float(values["flatness"])
+
     def keep_shape(self) -> None:
         """Tie the edge in the shape it has now in the beam end's present frame: the kept offsets
         and normals become those that make both gaps zero at the edge's nodes (collective; call

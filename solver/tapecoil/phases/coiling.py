@@ -202,17 +202,18 @@ class CoilingModel:
 
 
 # -- checkpoint -------------------------------------------------------------------------------
-def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict) -> None:
+def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict, tables: dict | None = None) -> None:
     """The state a restart or the deployment needs (:meth:`TapeOnHub.write_checkpoint`), with,
     for the secant predictor, the previous converged state; ``meta`` holds the hub angle, the
-    tension and the stepping's restart state."""
+    tension and the stepping's restart state; ``tables``: another model's state beside it (the
+    hybrid's)."""
     extra = {}
     previous = model.predictions.previous_converged()
     if previous is not None:
         state = dolfinx.fem.Function(model.model.W)
         state.x.array[:] = previous[1]
         extra = state_parts(state, "previous_")
-    model.tape.write_checkpoint(path, meta, extra)
+    model.tape.write_checkpoint(path, meta, extra, tables)
 
 
 def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[CoilingModel, dict]:

@@ -27,6 +27,7 @@ free end's guide and pull on the shell.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -167,6 +168,7 @@ class HybridCoiling:
         self.hybrid = self._build(0.0)
         self.moves.append((0.0, *self._ends(0.0)))
         self._next_step = self.first_step
+        self._leg: tuple[float, float] | None = None  # the leg being turned: its end and largest step
 
     def _ends(self, start: float) -> tuple[float, float]:
         return start, min(start + self.window_length, self.config.tape.L)
@@ -375,12 +377,16 @@ class HybridCoiling:
         rho = self.config.hub.radius + tp.h / 2
         bending = self.config.wall.bending
         while self.angle < final_angle - 1e-12:
-            # moved before a solve, never after: the state a call leaves is a converged one
-            self._move_window()
-            ahead = [a for a in stops if self.angle + 1e-12 < a < final_angle]
-            target = min([final_angle, self.angle + self.move / rho, *ahead])
-            span = target - self.angle
-            first = min(self._next_step, span)
+            if self._leg is None:
+                # moved before a solve, never after: the state a call leaves is a converged one
+                self._move_window()
+                ahead = [a for a in stops if self.angle + 1e-12 < a < final_angle]
+                target = min([final_angle, self.angle + self.move / rho, *ahead])
+                self._leg = (target, min(self.max_step, target - self.angle))
+            # a leg is the hub's turn between window moves, its largest step set at its start (a
+            # restarted run goes on with the leg it stopped in, as it would have)
+            target, leg_step = self._leg
+            first = min(self._next_step, target - self.angle)
 
             def record(step):
                 self._record(step)
@@ -390,7 +396,7 @@ class HybridCoiling:
             self.hybrid.solve(
                 target,
                 first_step=first,
-                max_step=min(self.max_step, span),
+                max_step=leg_step,
                 min_step=1e-6,
                 relaxation=10 * bending.D11 / self.element**4,
                 on_step=record,
@@ -399,6 +405,31 @@ class HybridCoiling:
                 easy_iterations=EASY_ITERATIONS,
             )
             self.angle = target
+            self._leg = None
+
+    # -- restart -------------------------------------------------------------------------------
+    def restart_state(self) -> dict:
+        """What, beside its hybrid's tables (:meth:`HybridProblem.state_tables`), this coiling
+        needs to go on from its last converged step as if never stopped (JSON-ready)."""
+        return {
+            "hub_angle": self.angle,
+            "next_step": self._next_step,
+            "moves": [list(move) for move in self.moves],
+            "leg": None if self._leg is None else list(self._leg),
+            "records": [dataclasses.asdict(record) for record in self.records],
+        }
+
+    def restore(self, state: dict, tables: dict) -> None:
+        """Go on from :meth:`restart_state` and the tables of its hybrid: the window built again
+        where it was (its PETSc prefix the same) and its state put back (collective)."""
+        self.moves = [tuple(move) for move in state["moves"]]
+        self.records = [CoilingRecord(**{**r, "window": tuple(r["window"])}) for r in state["records"]]
+        self.angle = float(state["hub_angle"])
+        self._next_step = float(state["next_step"])
+        self._leg = None if state["leg"] is None else tuple(state["leg"])
+        self.hybrid = self.build(self.moves[-1][1], f"hybrid_coil{len(self.moves) - 1}")
+        self.hybrid.set_state(tables)
+        self._t0 = time.perf_counter() - (self.records[-1].wall_time if self.records else 0.0)
 
     def carry_into(self, model, hybrid: HybridProblem | None = None, angle: float | None = None) -> None:
         """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingModel` of

@@ -16,8 +16,11 @@ equilibrium is the stowed state: its checkpoint, the coil's measures of the summ
 names as the shell's) and the deployment from it are the full shell's. The summary's
 ``measures["hybrid"]`` keeps the hybrid's own energy and what settling changed.
 
-A hybrid coiling is not resumed mid-run (its beams and window are not checkpointed): a stopped
-one is coiled again from the start.
+Its checkpoints (stowed/) are the full shell's, in the hybrid's configuration (or settled, at
+the end), with the hybrid's own state beside it (``tables.npz``: the window's and the beams'
+fields cell by cell, :meth:`HybridProblem.state_tables`, and in the meta where the window is
+and the step it was taking): a stopped coiling goes on from its last checkpoint as if never
+stopped, and a completed one gives its hybrid's coil to the deployment without coiling again.
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ from tapecoil.measures.payout import (
     tension_law_with_edges,
 )
 from tapecoil.models.nodes import Nodes
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingModel, write_checkpoint
 from tapecoil.phases.coiling_run import HubTurningPhase, write_coiled_cells
 from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings
 from tapecoil.phases.runner import LOG, run_phase
@@ -51,13 +54,21 @@ __all__ = ["HybridCoilingPhase", "run_hybrid_coiling", "settle"]
 
 class HybridCoilingPhase(HubTurningPhase):
     """The hybrid's coiling to ``coiling.hub_angle`` (see the module), the full shell settled at
-    the end. ``restart``: a completed hybrid coiling's restart state (its history and settling),
-    whose full shell is ``model``; nothing is computed then."""
+    the end. ``restart``: the restart state of a checkpoint (its history, windows and settling),
+    whose full shell is ``model`` and whose hybrid is ``coiling`` (restored from it, or None
+    when the checkpoint has none); ``completed``: that coiling had ended, and nothing is computed."""
 
     name, checkpoint_name = "coiling", "stowed"
 
     def __init__(
-        self, config: Config, comm=MPI.COMM_WORLD, model: CoilingModel | None = None, restart=None, stop=None
+        self,
+        config: Config,
+        comm=MPI.COMM_WORLD,
+        model: CoilingModel | None = None,
+        restart=None,
+        stop=None,
+        coiling: HybridCoiling | None = None,
+        completed: bool = False,
     ):
         super().__init__(model or CoilingModel(config, comm))
         self.config, self.comm, self.stop = config, comm, stop
@@ -65,8 +76,8 @@ class HybridCoilingPhase(HubTurningPhase):
         self.settling: dict = dict(restart["settling"]) if restart else {}
         self.windows: list = [tuple(w) for w in restart["windows"]] if restart else []
         self.history = list(restart["history"]) if restart else []
-        self.completed = restart is not None
-        self.coiling = None
+        self.completed = completed
+        self.coiling = coiling
         self._cells = None
         self._t0 = time.perf_counter() - (self.history[-1]["wall_time"] if self.history else 0.0)
 
@@ -76,22 +87,30 @@ class HybridCoilingPhase(HubTurningPhase):
             "history": self.history,
             "settling": self.settling,
             "windows": self.windows,
+            "coiling": None if self.coiling is None else self.coiling.restart_state(),
         }
+
+    def write_checkpoint(self, path: Path, meta: dict) -> None:
+        """The full shell's checkpoint with the hybrid's tables beside it (collective)."""
+        tables = None if self.coiling is None else self.coiling.hybrid.state_tables()
+        write_checkpoint(self.model, path, meta, tables)
 
     def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
         window = f" window {row['window_start']:.3f}-{row['window_end']:.3f} m"
-        # no checkpoints on the way: the hybrid's state is not one a restart could continue
-        return row["hub_angle"], row["step"], row["newton_iterations"], f" {row['phase']}{window}", False
+        return row["hub_angle"], row["step"], row["newton_iterations"], f" {row['phase']}{window}", True
 
     # -- the run ------------------------------------------------------------------------------
     def advance(self) -> None:
-        self._t0 = time.perf_counter()
-        self.coiling = coiling = HybridCoiling(
-            self.config, self.comm, window=WindowSettings.from_config(self.config.model)
+        if self.coiling is None:
+            self._t0 = time.perf_counter()
+            self.coiling = HybridCoiling(
+                self.config, self.comm, window=WindowSettings.from_config(self.config.model)
+            )
+            flattening = self.coiling.flatten()
+            self._step("flatten", 0.0, 0.0, sum(int(r.iterations) for r in flattening))
+        self.coiling.coil(
+            self.target, on_step=lambda r: self._step("coil", r.hub_angle, r.step, r.iterations)
         )
-        flattening = coiling.flatten()
-        self._step("flatten", 0.0, 0.0, sum(int(r.iterations) for r in flattening))
-        coiling.coil(self.target, on_step=lambda r: self._step("coil", r.hub_angle, r.step, r.iterations))
         self.settle()
         self.completed = True
 
@@ -251,24 +270,35 @@ def run_hybrid_coiling(
     """Coil with the hybrid into ``directory`` (the files of
     :func:`~tapecoil.phases.coiling_run.run_coiling`); returns the phase summary, the full
     shell's settled :class:`CoilingModel` and the coiled :class:`HybridCoiling` (the hybrid's own
-    state, which its deployment starts from; None when nothing was computed). ``resume``: a
-    checkpoint of a completed hybrid coiling (its summary again, nothing computed); one of a
-    stopped hybrid coiling cannot be continued, and the coiling starts again."""
-    from tapecoil.core.checkpoint import read_meta
+    state, which its deployment starts from; None when a completed coiling's checkpoint does not
+    hold it). ``resume``: a checkpoint of a hybrid coiling to go on from as if never stopped (a
+    completed one's summary again, nothing computed); one without the hybrid's state (another
+    model's, or an older one's) is not continued, and the coiling starts again."""
+    from tapecoil.core.checkpoint import read_meta, read_tables
     from tapecoil.phases.coiling import read_checkpoint
 
     t_start = time.perf_counter()
     if resume is not None:
         meta = read_meta(resume)
         restart = meta.get("run") or {}
-        if meta.get("completed") and restart.get("model") == "hybrid":
+        tables = read_tables(resume)
+        ours = restart.get("model") == "hybrid"
+        resumable = ours and tables is not None and restart.get("coiling") is not None
+        if resumable or (ours and meta.get("completed")):
             model, _ = read_checkpoint(resume, config, comm)
-            LOG.info("hybrid coiling: completed in %s at %.6g rad", resume, model.root.angle)
-            phase = HybridCoilingPhase(config, comm, model=model, restart=restart)
-            return phase.summary(None, t_start), model, None
-        LOG.warning(
-            "hybrid coiling: %s cannot be continued (a stopped hybrid coiling); coiling again", resume
-        )
+            coiling = None
+            if resumable:
+                coiling = HybridCoiling(config, comm, window=WindowSettings.from_config(config.model))
+                coiling.restore(restart["coiling"], tables)
+            if meta.get("completed"):
+                LOG.info("hybrid coiling: completed in %s at %.6g rad", resume, model.root.angle)
+                phase = HybridCoilingPhase(config, comm, model, restart, coiling=coiling, completed=True)
+                return phase.summary(None, t_start), model, coiling
+            LOG.info("hybrid coiling resumed from %s at %.6g rad", resume, coiling.angle)
+            phase = HybridCoilingPhase(config, comm, model, restart, stop, coiling=coiling)
+            summary = run_phase(phase, directory, config, comm, model.model, restart, progress, t_start)
+            return summary, phase.model, phase.coiling
+        LOG.warning("hybrid coiling: %s holds no hybrid state to go on from; coiling again", resume)
     phase = HybridCoilingPhase(config, comm, stop=stop)
     res = phase.model.strip.resolution
     LOG.info(

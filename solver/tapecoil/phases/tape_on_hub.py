@@ -169,8 +169,11 @@ class TapeOnHub:
         """The functions of this state in a checkpoint: u, theta and the winding angles."""
         return {**state_parts(self.model.q, ""), "winding_angle": self.contact.psi}
 
-    def write_checkpoint(self, path: str | Path, meta: dict, extra: dict | None = None) -> None:
-        """Mesh, tags, state and winding angles (and a phase's ``extra`` functions) with ``meta``.
+    def write_checkpoint(
+        self, path: str | Path, meta: dict, extra: dict | None = None, tables: dict | None = None
+    ) -> None:
+        """Mesh, tags, state and winding angles (and a phase's ``extra`` functions and ``tables``,
+        :func:`~tapecoil.core.checkpoint.write_checkpoint`) with ``meta``.
 
         adios4dolfinx (ADIOS2 BP) for the mesh and the functions; ``meta`` (the hub angle and
         each phase's restart state) as JSON beside it. Written atomically
@@ -180,7 +183,7 @@ class TapeOnHub:
         res = self.strip.resolution
         meta = {**meta, "resolution": {"across": res.across, "along": res.along, "grading": res.grading}}
         tags = {"facets": self.strip.facet_tags, "cells": self.strip.cell_tags}
-        checkpoint.write_checkpoint(path, self.strip.mesh, tags, functions, meta, self.comm)
+        checkpoint.write_checkpoint(path, self.strip.mesh, tags, functions, meta, self.comm, tables)
 
     @classmethod
     def read_checkpoint(cls, path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[TapeOnHub, dict]:

@@ -120,6 +120,20 @@ class WindowOnHub(ShellProblem):
         if not self.flattening:
             self.contact.update(load)
 
+    def state_fields(self) -> dict:
+        """The shell's state and the winding angles of its nodes, as cell fields (a restart's)."""
+        from tapecoil.core.cell_state import function_field
+
+        return {"q": function_field(self.model.q), "winding": function_field(self.contact.psi)}
+
+    def state_values(self) -> dict:
+        return {"hub_angle": self.contact.hub_angle}
+
+    def set_state_values(self, values: dict) -> None:
+        """Put back :meth:`state_values` (after the fields): the contact's hub angle; the loads
+        are the caller's to set."""
+        self.contact.hub_angle = float(values["hub_angle"])
+
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
         return owned_edge_dofs(self.model, tag, sub)
