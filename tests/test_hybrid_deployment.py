@@ -561,3 +561,57 @@ def test_two_ranks_deploy_the_hybrid_on_a_free_hub_as_one():
     assert a.hub_angle == pytest.approx(b.hub_angle, abs=1e-9)
     for name in ("hub_rate", "angular_momentum", "kinetic_energy"):
         assert getattr(a, name) == pytest.approx(getattr(b, name), rel=1e-5, abs=1e-12), name
+
+
+def test_a_stopped_hybrid_deployment_goes_on_from_its_checkpoint_as_if_never_stopped(tmp_path):
+    """The coarse 4.5 rad coil deployed by the hybrid in a run for 20 ms on a free hub (25 times
+    the tape's rotary inertia), stopped 30 rows in (past the release, before the window's move
+    at 8 ms) and resumed from its checkpoint: the history is the uninterrupted run's, row by
+    row, to 1e-9 (times, steps, Newton iterations, the deployed fraction, the energies, the
+    hub's angle and rate, the root's loads, the window), the window moving where it did. A
+    checkpoint taken during the release (the hold not yet let go) holds no hybrid state, and
+    the run deploys again from the release."""
+    import csv
+
+    from test_hybrid_coiling import StopAfter
+
+    from tapecoil.core.checkpoint import read_meta, read_tables
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.hybrid_deployment_run import run_hybrid_deployment
+
+    config = coarse(4.5)
+    config = dataclasses.replace(
+        config,
+        model=dataclasses.replace(config.model, kind="hybrid"),
+        deployment=dataclasses.replace(config.deployment, t_end=0.02, hub="free"),
+        hub=dataclasses.replace(config.hub, inertia=25 * tape_inertia(config)),
+        output=dataclasses.replace(config.output, report=False, checkpoint_every=7),
+    )
+    comm = MPI.COMM_WORLD
+    coil = coiled(comm, 4.5)
+    model = CoilingModel(config, comm)  # the full shell the files are written through
+    coil.carry_into(model)
+    direct = run_hybrid_deployment(config, tmp_path / "direct", model, coil, comm, progress=False)
+    early = tmp_path / "early"
+    run_hybrid_deployment(config, early, model, coil, comm, progress=False, stop=StopAfter(10))
+    assert read_tables(early / "deployed") is None  # in the release: no hybrid state
+    stopped = run_hybrid_deployment(
+        config, tmp_path / "run", model, coil, comm, progress=False, stop=StopAfter(30)
+    )
+    checkpoint = tmp_path / "run" / "deployed"
+    assert stopped["interrupted"] == "SIGTERM" and read_tables(checkpoint) is not None
+    assert len(read_meta(checkpoint)["run"]["deployment"]["moves"]) == 1
+    resumed = run_hybrid_deployment(
+        config, tmp_path / "run", model, coil, comm, resume=checkpoint, progress=False
+    )
+    assert resumed["run"]["window_moves"] == direct["run"]["window_moves"] >= 1
+    rows = {
+        name: list(csv.DictReader((tmp_path / name / "deployment_history.csv").open()))
+        for name in ("direct", "run")
+    }
+    assert len(rows["run"]) == len(rows["direct"])
+    for mine, theirs in zip(rows["run"], rows["direct"], strict=True):
+        for key, value in theirs.items():
+            if key != "wall_time":
+                assert float(mine[key]) == pytest.approx(float(value), rel=1e-9, abs=1e-15), key
+    assert resumed["lambda"] == pytest.approx(direct["lambda"], rel=1e-12)

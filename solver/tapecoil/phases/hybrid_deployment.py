@@ -65,6 +65,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config.model import hybrid_need
+from tapecoil.core.cell_state import gather_fields, scatter_fields
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import owned_size
 from tapecoil.core.stepping import Continuation, ContinuationError
@@ -133,12 +134,15 @@ class CoilLoosening(ContinuationError):
 def _deploying(coiled, config):
     """``config`` for the deployment of a tape coiled under ``coiled`` (both
     :class:`~tapecoil.config.Config`); ValueError where they differ in more than what acts from
-    the release on."""
+    the release on (or acts on no computation: the [output] table, ``model.kind``)."""
     same = dataclasses.replace(
         config,
         deployment=coiled.deployment,
         hub=dataclasses.replace(config.hub, inertia=coiled.hub.inertia),
-        model=dataclasses.replace(config.model, window_release=coiled.model.window_release),
+        model=dataclasses.replace(
+            config.model, window_release=coiled.model.window_release, kind=coiled.model.kind
+        ),
+        output=coiled.output,
     )
     if same != coiled:
         differ = [
@@ -147,7 +151,7 @@ def _deploying(coiled, config):
         raise ValueError(
             f"the hybrid deploys the tape as it was coiled: the configuration differs from the "
             f"coiling's in [{'], ['.join(differ)}] (only [deployment], hub.inertia and "
-            "model.window_release act from the release on)"
+            "model.window_release act from the release on; [output] and model.kind on nothing)"
         )
     return config
 
@@ -170,9 +174,10 @@ class HybridDeployment:
     ``config``: the deployment's configuration, by default the coiling's. It may differ from
     the coiling's in its [deployment] table, ``hub.inertia`` and ``model.window_release``, which
     act from the release on, so that one coiled tape deploys under several settings; the
-    coiling is left as it was."""
+    coiling is left as it was. ``restart``, ``tables``: go on instead from a deployment of this
+    coiling as :meth:`restart_state` and :meth:`state_tables` left it, after its release."""
 
-    def __init__(self, coiling, config=None):
+    def __init__(self, coiling, config=None, restart: dict | None = None, tables: dict | None = None):
         self.coiling = coiling
         self.config = cfg = coiling.config if config is None else _deploying(coiling.config, config)
         self.comm = coiling.comm
@@ -198,6 +203,12 @@ class HybridDeployment:
         # from the beam (window_settling.settle's figures)
         self.placed_settling: list[dict] = []
         self.moves: list[tuple[float, float, float]] = []
+        self.next_step: float | None = None  # the step the stepping tries next
+        self.outcome = "t_end"
+        self._resumed = restart is not None
+        if restart is not None:
+            self._restore(restart, tables)
+            return
         old = coiling.hybrid
         # the window reaches the free end, whose hold the release lets go, and holds at least
         # window_release of the coil behind the lift-off, where the release's wave runs; a
@@ -236,6 +247,54 @@ class HybridDeployment:
         if np.any(self.motion.gravity):
             self.motion.start_falling()
         self.moves.append((0.0, *self.window()))
+
+    # -- restart -------------------------------------------------------------------------------
+    def restart_state(self) -> dict:
+        """What, beside :meth:`state_tables`, this deployment needs to go on from its last
+        converged step as if never stopped (JSON-ready; after the release: the hold's gone)."""
+        return {
+            "time": self.time,
+            "hub_angle": self.angle,
+            "external_work": self.external_work,
+            "beam_gap": list(self.beam_gap),
+            "next_step": self.next_step,
+            "moves": [list(move) for move in self.moves],
+            "placed_settling": self.placed_settling,
+            "records": [dataclasses.asdict(record) for record in self.records],
+            "rotor": None if self.rotor is None else self.rotor.state(),
+        }
+
+    def state_tables(self) -> dict[str, np.ndarray]:
+        """The hybrid's state (:meth:`HybridProblem.state_tables`) with the velocities and
+        accelerations of shell and beam, on rank 0 (collective)."""
+        tables = self.hybrid.state_tables()
+        rates = {f"field:motion:{name}": field for name, field in self.motion.rate_fields().items()}
+        tables.update(gather_fields(rates, self.comm))
+        return tables
+
+    def _restore(self, state: dict, tables: dict) -> None:
+        if state["time"] < self.config.deployment.release_time * (1 - 1e-12):
+            raise ValueError("a hybrid deployment goes on from a state after its release only")
+        self.time, self.angle = float(state["time"]), float(state["hub_angle"])
+        self.external_work = float(state["external_work"])
+        self.beam_gap = tuple(state["beam_gap"])
+        self.next_step = state["next_step"]
+        self.moves = [tuple(move) for move in state["moves"]]
+        self.placed_settling = list(state["placed_settling"])
+        self.records = [DeploymentRecord(**{**r, "window": tuple(r["window"])}) for r in state["records"]]
+        _, start, end = self.moves[-1]
+        self.hybrid = self.coiling.build(start, f"hybrid_deploy{len(self.moves) - 1}", released=True, end=end)
+        self.hybrid.set_state(tables)
+        # the hold has let go: its terms were zero since the release
+        self.hold = self.rotor = self.free_hub = None
+        self.motion = self._motion(self.hybrid, release=False)
+        rates = {f"field:motion:{name}": field for name, field in self.motion.rate_fields().items()}
+        scatter_fields(rates, tables)
+        self.motion.restart_rates()
+        if state["rotor"] is not None:
+            self.rotor = HubRotor(self.config.hub.inertia, self.motion.shell_scheme.parameters, self.angle)
+            self.rotor.restore(state["rotor"])
+            self.free_hub = self._free_hub(self.motion)
 
     # -- the hybrid and its motion -------------------------------------------------------------
     def _name(self) -> str:
@@ -400,92 +459,109 @@ class HybridDeployment:
         back, the last converged state kept."""
         cfg = self.config
         d = cfg.deployment
-        t0 = time.perf_counter()
+        t0 = time.perf_counter() - (self.records[-1].wall_time if self._resumed and self.records else 0.0)
         smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
         release = min(d.release_time, d.t_end)
         phases = [(release, min(release / 20, d.dt))] if release > 0 else []
         phases.append((d.t_end, max(d.max_dt, d.dt)))
-        if release <= 0:
+        if release <= 0 and self.hold is not None:
             self.hold.release(0.0)
-        next_step = None
-        outcome = "t_end"
+        if self._resumed and self.records:
+            # what the stopped run did after its last step: stop there, or move the window
+            self._resumed = False
+            try:
+                self._after_step(self.records[-1])
+            except _Restart:
+                pass
 
         def converged(step, end):
-            nonlocal next_step, outcome
             self.time = step.load
-            next_step = step.next_step if step.load < end else None
+            self.next_step = step.next_step if step.load < end else None
             record = self.record(step, t0)
             self.records.append(record)
             if on_step is not None:
                 on_step(record)
-            if record.deployed >= d.lambda_end:
-                outcome = "deployed"
-                raise _Restart
-            gap, at = self.beam_gap
-            if gap > LIFT_OFF_GAP * cfg.tape.h:
-                raise CoilLoosening(
-                    f"the coil loosens behind the hybrid's window at t = {self.time:.6g} s "
-                    f"(lambda = {record.deployed:.4g}): the flattened beam at s = {at:.4g} m has "
-                    f"lifted {gap / cfg.tape.h:.3g} thicknesses off its turn (the window starts at "
-                    f"{self.window()[0]:.4g} m). A tape that leaves the coil takes back its arc "
-                    "section, which the flattened beam cannot; deploy this tape with the full "
-                    "shell (model.kind = 'shell'). Last converged time "
-                    f"{self.time:.6g} s",
-                    self.time,
-                )
-            start = self._wanted_start(record.coiled_length)
-            if start is not None:
-                self._move(start)
-                raise _Restart
+            self._after_step(record)
 
         for end, max_dt in phases:
-            while self.time < end * (1 - 1e-12) and outcome != "deployed":
-                motion = self.motion
-                alpha_f = motion.shell_scheme.parameters.alpha_f
-
-                def set_time(target, motion=motion, alpha_f=alpha_f):
-                    dt = target - self.time
-                    for scheme in motion.schemes:
-                        scheme.set_step(dt)
-                    if self.hold is not None:
-                        self.hold.release(target - alpha_f * dt)
-
-                def predict(t_from, t_to, motion=motion):
-                    for scheme in motion.schemes:
-                        scheme.predict(t_to - t_from)
-                    if self.rotor is not None:
-                        self.rotor.predict(t_to - t_from)
-
-                span = end - self.time
-                control = cfg.solver.control(
-                    initial_step=min(d.dt / span, 1.0),
-                    max_step=min(max_dt / span, 1.0),
-                    min_step=smallest / span,
-                    range_fraction=d.t_end / span,
-                )
-                continuation = Continuation(
-                    motion.solver.solve if self.free_hub is None else self.free_hub.solve,
-                    set_time,
-                    JointState(self.hybrid.shell.model.q, self.hybrid.beam.model.q),
-                    control,
-                    predict=predict,
-                    error=self.step_error if d.error_tolerance > 0 else None,
-                    commit=lambda motion=motion: self._commit(motion),
-                    easy_iterations=8,
-                )
-                continuation.on_step = lambda step, end=end: converged(step, end)
-                first, next_step = next_step, None
-                try:
-                    continuation.run(self.time, end, first_step=first)
-                except _Restart:
-                    continue
-                except ContinuationError:
-                    if self.free_hub is not None:  # the root back where the last converged step left it
-                        self.free_hub.place(self.rotor.angle)
-                    raise
-            if outcome == "deployed":
+            while self.time < end * (1 - 1e-12) and self.outcome != "deployed":
+                self._leg(end, max_dt, smallest, converged)
+            if self.outcome == "deployed":
                 break
-        return outcome
+        return self.outcome
+
+    def _after_step(self, record: DeploymentRecord) -> None:
+        """After a converged step: raise _Restart when the tape is deployed (``outcome``) or the
+        window moved, :class:`CoilLoosening` when the coil has come loose behind it."""
+        cfg = self.config
+        if record.deployed >= cfg.deployment.lambda_end:
+            self.outcome = "deployed"
+            raise _Restart
+        gap, at = self.beam_gap
+        if gap > LIFT_OFF_GAP * cfg.tape.h:
+            raise CoilLoosening(
+                f"the coil loosens behind the hybrid's window at t = {self.time:.6g} s "
+                f"(lambda = {record.deployed:.4g}): the flattened beam at s = {at:.4g} m has "
+                f"lifted {gap / cfg.tape.h:.3g} thicknesses off its turn (the window starts at "
+                f"{self.window()[0]:.4g} m). A tape that leaves the coil takes back its arc "
+                "section, which the flattened beam cannot; deploy this tape with the full "
+                "shell (model.kind = 'shell'). Last converged time "
+                f"{self.time:.6g} s",
+                self.time,
+            )
+        start = self._wanted_start(record.coiled_length)
+        if start is not None:
+            self._move(start)
+            raise _Restart
+
+    def _leg(self, end: float, max_dt: float, smallest: float, converged) -> None:
+        """Step towards the time ``end`` [s] with this window until it moves, the tape is
+        deployed or ``end`` is reached (``converged(step, end)`` after each step)."""
+        cfg = self.config
+        d = cfg.deployment
+        motion = self.motion
+        alpha_f = motion.shell_scheme.parameters.alpha_f
+
+        def set_time(target):
+            dt = target - self.time
+            for scheme in motion.schemes:
+                scheme.set_step(dt)
+            if self.hold is not None:
+                self.hold.release(target - alpha_f * dt)
+
+        def predict(t_from, t_to):
+            for scheme in motion.schemes:
+                scheme.predict(t_to - t_from)
+            if self.rotor is not None:
+                self.rotor.predict(t_to - t_from)
+
+        span = end - self.time
+        control = cfg.solver.control(
+            initial_step=min(d.dt / span, 1.0),
+            max_step=min(max_dt / span, 1.0),
+            min_step=smallest / span,
+            range_fraction=d.t_end / span,
+        )
+        continuation = Continuation(
+            motion.solver.solve if self.free_hub is None else self.free_hub.solve,
+            set_time,
+            JointState(self.hybrid.shell.model.q, self.hybrid.beam.model.q),
+            control,
+            predict=predict,
+            error=self.step_error if d.error_tolerance > 0 else None,
+            commit=lambda: self._commit(motion),
+            easy_iterations=8,
+        )
+        continuation.on_step = lambda step: converged(step, end)
+        first, self.next_step = self.next_step, None
+        try:
+            continuation.run(self.time, end, first_step=first)
+        except _Restart:
+            return
+        except ContinuationError:
+            if self.free_hub is not None:  # the root back where the last converged step left it
+                self.free_hub.place(self.rotor.angle)
+            raise
 
     def destroy(self) -> None:
         self.motion.destroy()

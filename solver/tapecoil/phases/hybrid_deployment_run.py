@@ -11,9 +11,13 @@ definition, the strain, contact and kinetic energies and the energy balance's re
 the window's ends and the hybrid's DOFs, and the root's loads on the hub
 (:class:`~tapecoil.phases.root_loads.HybridRootLoads`) with their peaks in the summary.
 
-A completed hybrid deployment is not recomputed on ``--resume`` (its checkpoint keeps the
-history); a stopped one deploys again from the release: the hybrid's state in time is not
-checkpointed mid-run.
+Checkpoints (deployed/, every ``output.checkpoint_every`` steps from the end of the release
+on, at a stop and at the end) hold the full shell carried into the hybrid's configuration and,
+beside it, the hybrid's own state (``tables.npz``: shell, beams, ties, velocities and
+accelerations cell by cell, :meth:`HybridDeployment.state_tables`; in the meta the time, the
+window's moves, the hub's state and the step size): ``--resume`` goes on from the last one as
+if never stopped. A completed deployment is not recomputed; a checkpoint without the hybrid's
+state (written during the release, or by an older tapecoil) deploys again from the release.
 """
 
 from __future__ import annotations
@@ -36,40 +40,72 @@ class HybridDeploymentPhase(Phase):
     """The deployment of ``coiling``'s tape (a coiled
     :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`) by the hybrid, written through
     ``model``'s full shell (a :class:`~tapecoil.phases.coiling.CoilingModel` of the same
-    configuration: the settled stowed state); or, with ``restart``, the summary of a completed
-    one. ``stop``: as the full shell's deployment."""
+    configuration: the settled stowed state). ``restart``: a checkpoint's restart state, with
+    ``deployment`` restored from it to go on with, or ``completed`` (its summary, nothing
+    computed). ``stop``: as the full shell's deployment."""
 
     name, checkpoint_name, unit = "deployment", "deployed", "s"
 
-    def __init__(self, config: Config, model, coiling=None, restart: dict | None = None, stop=None):
+    def __init__(
+        self,
+        config: Config,
+        model,
+        coiling=None,
+        restart: dict | None = None,
+        stop=None,
+        deployment: HybridDeployment | None = None,
+        completed: bool = False,
+    ):
         super().__init__()
         self.config, self.model, self.coiling, self.stop = config, model, coiling, stop
         self.comm = model.comm
         self.target = config.deployment.t_end
-        self.deployment = None
+        self.deployment = deployment
         self.moves: list = []
         self.placed_settling: list = []
         self.dofs = 0
-        self._t0 = time.perf_counter()
         self._stowed_energy = 0.0
+        self.completed = completed
         if restart is not None:
             self.history = list(restart["history"])
-            self.completed = True
             self.moves = restart.get("moves", [])
             self.dofs = restart.get("dofs", 0)
+            self._stowed_energy = restart.get("stowed_energy", 0.0)
+        self._t0 = time.perf_counter() - (self.history[-1]["wall_time"] if self.history else 0.0)
 
     # -- the runner's hooks ---------------------------------------------------------------------
     def position(self) -> float:
         return self.history[-1]["time"] if self.history else 0.0
 
+    def _restartable(self) -> bool:
+        """Whether the deployment's state can be gone on from: after the release, its hold gone
+        (a restored deployment has none)."""
+        d = self.deployment
+        return d is not None and d.time >= self.config.deployment.release_time * (1 - 1e-12)
+
     def restart_state(self) -> dict:
-        return {"model": "hybrid", "history": self.history, "moves": self.moves, "dofs": self.dofs}
+        deployment = self.deployment if self._restartable() else None
+        return {
+            "model": "hybrid",
+            "history": self.history,
+            "moves": self.moves,
+            "dofs": self.dofs,
+            "stowed_energy": self._stowed_energy,
+            "deployment": None if deployment is None else deployment.restart_state(),
+        }
 
     def checkpoint_meta(self) -> dict:
         return {"hub_angle": self.model.root.angle, "tension": 0.0}
 
     def write_checkpoint(self, path: Path, meta: dict) -> None:
-        self.model.tape.write_checkpoint(path, meta)
+        """The full shell carried into the hybrid's configuration, with the hybrid's own state
+        beside it (collective)."""
+        tables = None
+        if self.deployment is not None:
+            self._carry()
+        if self._restartable():
+            tables = self.deployment.state_tables()
+        self.model.tape.write_checkpoint(path, meta, tables=tables)
 
     def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
         window = f" window {row['window_start']:.3f}-{row['window_end']:.3f} m"
@@ -78,7 +114,7 @@ class HybridDeploymentPhase(Phase):
             row["step"],
             row["newton_iterations"],
             f" lambda {row['lambda']:.3f}{window}",
-            False,
+            self._restartable(),
         )
 
     def _row(self, record: DeploymentRecord) -> dict:
@@ -130,15 +166,17 @@ class HybridDeploymentPhase(Phase):
 
     def advance(self) -> None:
         d = self.config.deployment
-        self._t0 = time.perf_counter()
-        self.deployment = deployment = HybridDeployment(self.coiling, self.config)
-        LOG.info(
-            "deployment with the hybrid: generalized-alpha, rho_inf = %g, to lambda = %g, window %g-%g m",
-            deployment.rho_inf,
-            d.lambda_end,
-            *deployment.window(),
-        )
-        self._add(deployment.record())
+        deployment = self.deployment
+        if deployment is None:
+            self._t0 = time.perf_counter()
+            self.deployment = deployment = HybridDeployment(self.coiling, self.config)
+            LOG.info(
+                "deployment with the hybrid: generalized-alpha, rho_inf = %g, to lambda = %g, window %g-%g m",
+                deployment.rho_inf,
+                d.lambda_end,
+                *deployment.window(),
+            )
+            self._add(deployment.record())
         try:
             outcome = deployment.run(self._add)
             self.completed = outcome == "deployed"
@@ -193,19 +231,30 @@ def run_hybrid_deployment(
     """Deploy ``coiling``'s tape (a coiled :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`)
     with the hybrid into ``directory``, its files written through ``model``'s full shell (the
     settled stowed :class:`~tapecoil.phases.coiling.CoilingModel`); returns the phase summary.
-    ``resume``: a deployment checkpoint; a completed hybrid one gives its summary again; else the
-    deployment starts from the release (``coiling`` is then needed)."""
-    from tapecoil.core.checkpoint import read_meta
+    ``resume``: a deployment checkpoint to go on from as if never stopped (``coiling`` is the
+    coil it deploys); a completed hybrid one gives its summary again; one without the hybrid's
+    state deploys again from the release (``coiling`` is needed in both)."""
+    from tapecoil.core.checkpoint import read_meta, read_tables
 
     t_start = time.perf_counter()
     if resume is not None:
         meta = read_meta(resume)
         restart = meta.get("run") or {}
-        if meta.get("completed") and restart.get("model") == "hybrid":
+        ours = restart.get("model") == "hybrid"
+        if meta.get("completed") and ours:
             LOG.info("hybrid deployment: completed in %s", resume)
-            phase = HybridDeploymentPhase(config, model, restart=restart)
+            phase = HybridDeploymentPhase(config, model, restart=restart, completed=True)
             return phase.summary(None, t_start)
-        LOG.warning("hybrid deployment: %s cannot be continued; deploying again from the release", resume)
+        tables = read_tables(resume)
+        if ours and coiling is not None and tables is not None and restart.get("deployment"):
+            deployment = HybridDeployment(coiling, config, restart=restart["deployment"], tables=tables)
+            LOG.info("hybrid deployment resumed from %s at t = %.6g s", resume, deployment.time)
+            phase = HybridDeploymentPhase(config, model, coiling, restart, stop, deployment=deployment)
+            return run_phase(phase, directory, config, comm, model.model, restart, progress, t_start)
+        LOG.warning(
+            "hybrid deployment: %s holds no hybrid state to go on from; deploying again from the release",
+            resume,
+        )
     if coiling is None:
         raise ValueError("the hybrid deploys the tape its own coiling left: coil with the hybrid first")
     phase = HybridDeploymentPhase(config, model, coiling, stop=stop)

@@ -95,6 +95,23 @@ class HybridMotion:
         for scheme, (v, a) in zip(self.schemes, (rates[:2], rates[2:]), strict=True):
             scheme.v_old.x.array[:] = v
             scheme.a_old.x.array[:] = a
+        self.restart_rates()
+
+    def rate_fields(self) -> dict:
+        """The velocities and accelerations of the last converged time, as cell fields (views,
+        :mod:`tapecoil.core.cell_state`): a restart's."""
+        from tapecoil.core.cell_state import function_field
+
+        return {
+            f"{part}_{kind}": function_field(getattr(scheme, f"{kind}_old"))
+            for part, scheme in zip(("shell", "beam"), self.schemes, strict=True)
+            for kind in ("v", "a")
+        }
+
+    def restart_rates(self) -> None:
+        """Step on from the present state with the rates set in the schemes (:meth:`set_rates`,
+        or through :meth:`rate_fields`)."""
+        for scheme in self.schemes:
             scheme.restart()
         self.beam.committed()
 
