@@ -208,6 +208,13 @@ SHORT_RUN = (
 # the same with the hub free to turn (10^-5 kg m^2, some 30 times the short tape's own inertia)
 FREE_HUB_RUN = SHORT_RUN.replace("[deployment]\n", "[deployment]\nhub = 'free'\n") + "[hub]\ninertia = 1e-5\n"
 
+# the hybrid's run: the coarse benchmark coiled 4.5 rad (its window leaves the root once) and
+# deployed 10 ms, a window move on the way, checkpoints every 3 steps
+HYBRID_RUN = (
+    "[model]\nkind = 'hybrid'\n[coiling]\nhub_angle = 4.5\n[mesh]\npreset = 'coarse'\n"
+    "[deployment]\nt_end = 0.01\n[output]\nvtx_every = 3\ncheckpoint_every = 3\n"
+)
+
 
 def test_run_pipeline_then_deploy_from_its_checkpoint(tmp_path, capsys):
     """tapecoil run (coil, stow, deploy) on a short tape, then tapecoil deploy from its checkpoint."""
@@ -255,13 +262,17 @@ def _tapecoil(*args, **kwargs):
         ("deployment", 5, SHORT_RUN),
         # the free hub's restart state on top of the fixed hub's: make validate
         pytest.param("deployment", 5, FREE_HUB_RUN, marks=pytest.mark.slow),
+        # the hybrid's state beside the full shell's, in both phases (its deployment past the
+        # release, whose 20 steps keep no hybrid state)
+        pytest.param("coiling", 30, HYBRID_RUN, marks=pytest.mark.slow),
+        pytest.param("deployment", 30, HYBRID_RUN, marks=pytest.mark.slow),
     ],
-    ids=["coiling", "deployment", "deployment-free-hub"],
+    ids=["coiling", "deployment", "deployment-free-hub", "hybrid-coiling", "hybrid-deployment"],
 )
 def test_a_stopped_run_resumes_to_the_same_result(tmp_path, phase, after, run):
-    """SIGTERM during the coiling or the deployment (with a fixed or a free hub): the run stops
-    after its step with the checkpoint written (exit 143); --resume finishes it with the result
-    of a run never stopped."""
+    """SIGTERM during the coiling or the deployment (with a fixed or a free hub, or the hybrid
+    model): the run stops after its step with the checkpoint written (exit 143); --resume
+    finishes it with the result of a run never stopped."""
     import signal
     import time
 
