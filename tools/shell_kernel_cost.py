@@ -3,12 +3,9 @@ preset, default "default") with the spiral of turns of ``--hub-angle`` [rad], ea
 Hessian (membrane, bending, shear, the whole strain, the contact, strain and contact) and the
 coiling solver's Jacobian and residual assembled alone, 20 times each, on one rank; prints the
 mean time of each [ms] (docs/hybrid.md, "A shorter window does not make it three times
-faster": the spiral's turns enter the contact's kernel). The Hessians are compiled with
-tapecoil's compiler options (:mod:`tapecoil.core.jit`), with ``--dolfinx-flags`` with
-DOLFINx's own (``-O2 -g0``) for comparison.
+faster": the spiral's turns enter the contact's kernel).
 
-    tools/env.sh run env PYTHONPATH=solver python3 tools/shell_kernel_cost.py \
-        [--hub-angle 141.9] [--dolfinx-flags]
+    tools/env.sh run env PYTHONPATH=solver python3 tools/shell_kernel_cost.py [--hub-angle 141.9]
 """
 
 import argparse
@@ -21,15 +18,12 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.config import Config
-from tapecoil.core import compat, jit
+from tapecoil.core import compat
 from tapecoil.phases.coiling import CoilingModel
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("mesh", nargs="?", default="default", choices=("coarse", "default", "fine"))
 parser.add_argument("--hub-angle", type=float, help="coiling.hub_angle [rad] (default the benchmark's)")
-parser.add_argument(
-    "--dolfinx-flags", action="store_true", help="compile the Hessians with DOLFINx's options"
-)
 args = parser.parse_args()
 if MPI.COMM_WORLD.size != 1:
     raise SystemExit("time the kernels on one rank")
@@ -55,8 +49,9 @@ def timed(assemble) -> float:
 
 
 def hessian(energy):
-    a = ufl.derivative(ufl.derivative(energy, shell.q, shell.dq), shell.q, ufl.TrialFunction(shell.W))
-    form = dolfinx.fem.form(a) if args.dolfinx_flags else jit.form(a)
+    form = dolfinx.fem.form(
+        ufl.derivative(ufl.derivative(energy, shell.q, shell.dq), shell.q, ufl.TrialFunction(shell.W))
+    )
     A = dolfinx.fem.petsc.create_matrix(form)
 
     def assemble():

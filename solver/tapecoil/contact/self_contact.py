@@ -54,7 +54,6 @@ from petsc4py import PETSc
 
 from tapecoil.contact.linearisation import NodalNormals, gap_derivatives
 from tapecoil.contact.projection import CandidateSearch, closest_points
-from tapecoil.core import jit
 
 
 def smoothed_bracket(gap: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -123,7 +122,7 @@ class GatheredSurface:
             -1, 3
         )
         test = ufl.TestFunction(nodes.space)
-        area = dolfinx.fem.assemble_vector(jit.form(test * model.jacobian * model.dx))
+        area = dolfinx.fem.assemble_vector(dolfinx.fem.form(test * model.jacobian * model.dx))
         area.scatter_reverse(dolfinx.la.InsertMode.add)
 
         self.owned = global_node[:n_owned]

@@ -35,7 +35,7 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.config import Config
-from tapecoil.core import checkpoint, jit
+from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import assemble_into, global_scalar, owned_constrained_dofs
 from tapecoil.core.newton import SNESSolver
@@ -88,7 +88,7 @@ class CoilingModel:
         self.bcs = bcs
 
         # the pull: T spread evenly over the free end's arc; its work is T times the end's mean u_x
-        self.end_slide_form = jit.form(model.u[0] / tp.b * model.ds(FREE_END))
+        self.end_slide_form = dolfinx.fem.form(model.u[0] / tp.b * model.ds(FREE_END))
         self.pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
         self.obstacles = tuple(obstacles)
         self.energy = tape.energy + sum(o.energy for o in self.obstacles)
@@ -150,7 +150,7 @@ class CoilingModel:
     def internal_force(self) -> np.ndarray:
         """The internal force vector dE/dq (strain + hub and turns' contact), local array (collective)."""
         if self._reaction_form is None:
-            self._reaction_form = jit.form(ufl.derivative(self.energy, self.model.q, self.model.dq))
+            self._reaction_form = dolfinx.fem.form(ufl.derivative(self.energy, self.model.q, self.model.dq))
             self._reaction_vector = dolfinx.fem.Function(self.model.W)
             self._end_dofs = self.tape.edge_dofs(FREE_END, (0, 0))
             self._root_dofs = [self.tape.edge_dofs(ROOT, (0, i)) for i in range(3)]

@@ -23,7 +23,6 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
-from tapecoil.core import jit
 from tapecoil.core.dofs import assemble_into, owned_constrained_dofs
 from tapecoil.core.rotation import rotation_matrix
 
@@ -79,7 +78,7 @@ class RootLoads:
         self.m, self.eps = model, eps
         tape = model.tape
         # the root's own share of the weight is the attachment's too
-        self.form = jit.form(model.forms.reaction() - model.weight)
+        self.form = dolfinx.fem.form(model.forms.reaction() - model.weight)
         self.reaction = dolfinx.fem.Function(model.model.W)
         nodes = tape.contact.nodes
         held = owned_constrained_dofs(model.model.W, model.bcs)
@@ -130,7 +129,7 @@ class HybridRootLoads:
             self.model = model
             held = owned_constrained_dofs(model.W, beam.bcs)
             self.root = np.flatnonzero(np.isin(model.node_u_dofs[:, 0], held))
-        self.form = jit.form(form)
+        self.form = dolfinx.fem.form(form)
         self.reaction = dolfinx.fem.Function(self.model.W)
 
     def __call__(self) -> dict[str, float]:

@@ -19,7 +19,7 @@ from mpi4py import MPI
 
 from tapecoil.config import Config
 from tapecoil.contact.term import SOLVER_OPTIONS
-from tapecoil.core import checkpoint, jit
+from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar
 from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_strip_mesh
@@ -88,7 +88,7 @@ class TapeOnHub:
         ]
         if self.contact.energy_coil is not None:
             parts.append(("contact_coil", self.contact.energy_coil))
-        self.forms = {name: jit.form(form) for name, form in parts}
+        self.forms = {name: dolfinx.fem.form(form) for name, form in parts}
 
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
