@@ -268,9 +268,12 @@ class HybridDeployment:
         """The hybrid's state (:meth:`HybridProblem.state_tables`) with the velocities and
         accelerations of shell and beam, on rank 0 (collective)."""
         tables = self.hybrid.state_tables()
-        rates = {f"field:motion:{name}": field for name, field in self.motion.rate_fields().items()}
-        tables.update(gather_fields(rates, self.comm))
+        tables.update(gather_fields(self._rate_fields(), self.comm))
         return tables
+
+    def _rate_fields(self) -> dict:
+        """The motion's velocities and accelerations as cell fields, named as in the tables."""
+        return {f"field:motion:{name}": field for name, field in self.motion.rate_fields().items()}
 
     def _restore(self, state: dict, tables: dict) -> None:
         if state["time"] < self.config.deployment.release_time * (1 - 1e-12):
@@ -288,8 +291,7 @@ class HybridDeployment:
         # the hold has let go: its terms were zero since the release
         self.hold = self.rotor = self.free_hub = None
         self.motion = self._motion(self.hybrid, release=False)
-        rates = {f"field:motion:{name}": field for name, field in self.motion.rate_fields().items()}
-        scatter_fields(rates, tables)
+        scatter_fields(self._rate_fields(), tables)
         self.motion.restart_rates()
         if state["rotor"] is not None:
             self.rotor = HubRotor(self.config.hub.inertia, self.motion.shell_scheme.parameters, self.angle)
