@@ -275,10 +275,15 @@ class HybridDeployment:
         """The motion's velocities and accelerations as cell fields, named as in the tables."""
         return {f"field:motion:{name}": field for name, field in self.motion.rate_fields().items()}
 
+    def released(self) -> bool:
+        """Whether the release is over, its hold let go: from then on the state is one a restart
+        goes on from (a restored deployment has no hold)."""
+        return self.time >= self.config.deployment.release_time * (1 - 1e-12)
+
     def _restore(self, state: dict, tables: dict) -> None:
-        if state["time"] < self.config.deployment.release_time * (1 - 1e-12):
-            raise ValueError("a hybrid deployment goes on from a state after its release only")
         self.time, self.angle = float(state["time"]), float(state["hub_angle"])
+        if not self.released():
+            raise ValueError("a hybrid deployment goes on from a state after its release only")
         self.external_work = float(state["external_work"])
         self.beam_gap = tuple(state["beam_gap"])
         self.next_step = state["next_step"]

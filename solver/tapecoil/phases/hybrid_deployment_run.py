@@ -78,10 +78,8 @@ class HybridDeploymentPhase(Phase):
         return self.history[-1]["time"] if self.history else 0.0
 
     def _restartable(self) -> bool:
-        """Whether the deployment's state can be gone on from: after the release, its hold gone
-        (a restored deployment has none)."""
-        d = self.deployment
-        return d is not None and d.time >= self.config.deployment.release_time * (1 - 1e-12)
+        """Whether the deployment's state can be gone on from (:meth:`HybridDeployment.released`)."""
+        return self.deployment is not None and self.deployment.released()
 
     def restart_state(self) -> dict:
         deployment = self.deployment if self._restartable() else None
