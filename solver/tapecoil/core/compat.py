@@ -56,6 +56,30 @@ def assemble_matrix(A, a, bcs, diagonal: float = 1.0):
     return dolfinx.fem.petsc.assemble_matrix(A, a, bcs, diagonal)
 
 
+def assemble_matrix_local(A, a, bcs) -> None:
+    """Add the bilinear form ``a`` into A through A's local numbering, one dof per index, rows
+    and columns of Dirichlet dofs left out (their diagonal is :func:`insert_diagonal`'s).
+
+    A may be a local reference to a block of a larger matrix (``getLocalSubMatrix``), as in
+    DOLFINx's own block assembly; its Python wrappers for that differ between 0.9 and 0.10+
+    and take lists of forms on one mesh, so tapecoil calls the layer beneath them, which is the
+    same on 0.9 to 0.11.
+    """
+    form = a._cpp_object
+    constants = dolfinx.cpp.fem.pack_constants(form)
+    coefficients = dolfinx.cpp.fem.pack_coefficients(form)
+    cpp_bcs = [bc._cpp_object for bc in bcs]
+    dolfinx.cpp.fem.petsc.assemble_matrix(A, form, constants, coefficients, cpp_bcs, True)
+
+
+def insert_diagonal(A, a, bcs, diagonal: float = 1.0) -> None:
+    """Set A's diagonal entries on the Dirichlet dofs of ``a``'s (square) form to ``diagonal``,
+    through A's local numbering (see :func:`assemble_matrix_local`); A must be flushed after
+    adding and before this call."""
+    cpp_bcs = [bc._cpp_object for bc in bcs]
+    dolfinx.cpp.fem.petsc.insert_diagonal(A, a.function_spaces[0], cpp_bcs, diagonal)
+
+
 def collapse(space) -> tuple:
     """``space.collapse()`` as ``(collapsed space, map)`` with the map a flat int32 array.
 

@@ -7,9 +7,12 @@ parameters c are a few dofs of the second problem's state (:class:`DofCoupling`:
 tied to a beam's end node, whose six dofs are c). E's derivatives in q0 join the first block's
 forms; its derivatives in c, an n-vector, n vectors on the first space and an n x n matrix
 (UFL differentiates E with respect to c as a variable), are placed in the second block's rows
-and in the off-diagonal blocks. The joint matrix is a PETSc MATNEST of the four
-blocks converted to AIJ, so that no form couples the two meshes and the same code serves
-DOLFINx 0.9 to 0.11 (whose block assembly differs).
+and in the off-diagonal blocks. The joint matrix is one AIJ matrix: its pattern is that of a
+PETSc MATNEST of the four blocks converted to AIJ, made once; at every Newton iteration each
+block's form is assembled straight into its diagonal block (a local reference, as DOLFINx's
+block assembly does, so that no form couples the two meshes) and the coupling's entries are
+added by their global rows and columns. Converting the MATNEST at every iteration instead cost
+a fifth of the Jacobian's time.
 
 The flat numbering is PETSc's for a MATNEST: each rank's rows of the first block, then its rows
 of the second.
@@ -255,7 +258,6 @@ class CoupledSNESSolver:
         first, second = blocks
         self.F_forms = [dolfinx.fem.form(first.F + coupling.residual0), dolfinx.fem.form(second.F)]
         self.J_forms = [dolfinx.fem.form(first.J + coupling.jacobian0), dolfinx.fem.form(second.J)]
-        self.A = [dolfinx.fem.petsc.create_matrix(J) for J in self.J_forms]
         self.b = [compat.create_vector(blk.q.function_space) for blk in blocks]
         comm = first.q.function_space.mesh.comm
         self.comm = comm
@@ -264,23 +266,10 @@ class CoupledSNESSolver:
         # the rows of the first block that the coupling touches: the dofs of the cells its
         # integrals see; every Jacobian sets all of them, zeros too, so the pattern is fixed
         self._rows = self._coupled_rows()
-        n0, n1 = (owned_size(blk.q.function_space) for blk in blocks)
-        N0, N1 = (global_size(blk.q.function_space) for blk in blocks)
-        c = len(coupling.dofs)
-        self.C = PETSc.Mat().createAIJ(((n0, N0), (n1, N1)), nnz=(c, c), comm=comm)
-        self.C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
-        self.C.setUp()
-        self._fill_coupling_block(np.zeros((len(self._rows), c)))
-        self.CT = self.C.transpose(PETSc.Mat())  # without a target, petsc4py transposes in place
-        for A, J in zip(self.A, self.J_forms, strict=True):
-            A.zeroEntries()
-            compat.assemble_matrix(A, J, [])
-            A.assemble()
-        self._hessian_pattern()
-        nest = PETSc.Mat().createNest([[self.A[0], self.C], [self.CT, self.A[1]]], comm=comm)
-        self.index_sets = nest.getNestISs()[0]
-        self.J = nest.convert("aij", PETSc.Mat())  # without a target, petsc4py converts in place
-        nest.destroy()
+        self.J, self.index_sets = self._joint_matrix()
+        self._local_sets = self._set_local_numbering()
+        self._row_start = self.J.getOwnershipRange()[0]
+        self._coupled = self._joint_indices(coupling.global_dofs)
         self.x = self.J.createVecRight()
         self.r = self.J.createVecRight()
 
@@ -317,27 +306,74 @@ class CoupledSNESSolver:
         rows = rows[rows < owned_size(V0)]
         return np.setdiff1d(rows, owned_constrained_dofs(V0, self.blocks[0].bcs)).astype(PETSc.IntType)
 
-    def _fill_coupling_block(self, values: np.ndarray) -> None:
-        """C[rows, coupled dofs] = values (rows, n); rows are owned, local to the first block."""
-        start = self.C.getOwnershipRange()[0]
-        self.C.zeroEntries()
-        cols = self.coupling.global_dofs
-        for row, line in zip(self._rows, values, strict=True):
-            self.C.setValues([start + row], cols, line, addv=PETSc.InsertMode.INSERT_VALUES)
-        self.C.assemble()
-
-    def _hessian_pattern(self) -> None:
-        """Make sure the second block's matrix holds the coupled dofs' n x n entries."""
-        self._add_hessian(np.zeros((len(self.coupling.dofs),) * 2))
-        self.A[1].assemble()
-
-    def _add_hessian(self, H: np.ndarray) -> None:
+    def _joint_matrix(self):
+        """The joint AIJ matrix with every entry any Jacobian sets (the blocks' form patterns,
+        the coupled rows against the coupled dofs and back, the coupled dofs' n x n), and the
+        global index sets of the two blocks in it (collective)."""
+        blocks, comm = self.blocks, self.comm
+        A = [dolfinx.fem.petsc.create_matrix(J) for J in self.J_forms]
+        for matrix, J in zip(A, self.J_forms, strict=True):
+            matrix.zeroEntries()
+            compat.assemble_matrix(matrix, J, [])
+            matrix.assemble()
         cp = self.coupling
-        A = self.A[1]
-        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        c = len(cp.dofs)
+        A[1].setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         rows = cp.global_dofs[cp.owned]
         if len(rows):
-            A.setValues(rows, cp.global_dofs, H[cp.owned], addv=PETSc.InsertMode.ADD_VALUES)
+            A[1].setValues(rows, cp.global_dofs, np.zeros((len(rows), c)), addv=PETSc.InsertMode.ADD_VALUES)
+        A[1].assemble()
+        n0, n1 = (owned_size(blk.q.function_space) for blk in blocks)
+        N0, N1 = (global_size(blk.q.function_space) for blk in blocks)
+        C = PETSc.Mat().createAIJ(((n0, N0), (n1, N1)), nnz=(c, c), comm=comm)
+        C.setUp()
+        start = C.getOwnershipRange()[0]
+        for row in self._rows:
+            C.setValues([start + row], cp.global_dofs, np.zeros(c), addv=PETSc.InsertMode.INSERT_VALUES)
+        C.assemble()
+        CT = C.transpose(PETSc.Mat())  # without a target, petsc4py transposes in place
+        nest = PETSc.Mat().createNest([[A[0], C], [CT, A[1]]], comm=comm)
+        index_sets = nest.getNestISs()[0]
+        J = nest.convert("aij", PETSc.Mat())  # without a target, petsc4py converts in place
+        for matrix in (nest, C, CT, *A):
+            matrix.destroy()
+        J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        return J, index_sets
+
+    def _joint_indices(self, second: np.ndarray) -> np.ndarray:
+        """Global rows of the joint matrix of dofs of the second block given by their global
+        indices in that block (collective)."""
+        V = self.blocks[1].q.function_space
+        owned = np.array(self.comm.allgather(owned_size(V)))
+        starts = np.concatenate([[0], np.cumsum(owned)[:-1]])  # each rank's first dof of the block
+        first = np.array(self.comm.allgather(self._row_start + owned_size(self.blocks[0].q.function_space)))
+        owner = np.searchsorted(starts, second, side="right") - 1
+        return (first[owner] + second - starts[owner]).astype(PETSc.IntType)
+
+    def _set_local_numbering(self) -> list:
+        """Give the joint matrix a local numbering, each block's local dofs (owned, then ghosts,
+        one index per dof) after the other, and return each block's local index set in it, for
+        the forms' assembly through local references (collective)."""
+        comm, start = self.comm, self.J.getOwnershipRange()[0]
+        to_global, local_sets, offset = [], [], 0
+        first = start
+        for blk in self.blocks:
+            V = blk.q.function_space
+            index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+            n = owned_size(V)
+            firsts = np.array(comm.allgather(first))  # each rank's first joint row of this block
+            block_starts = np.array(comm.allgather(index_map.local_range[0]))
+            owners = np.asarray(index_map.owners)
+            ghost_rows = firsts[owners] + bs * (np.asarray(index_map.ghosts) - block_starts[owners])
+            rows = np.concatenate([first + np.arange(n), (ghost_rows[:, None] + np.arange(bs)).reshape(-1)])
+            to_global.append(rows)
+            local_sets.append(PETSc.IS().createStride(len(rows), offset, 1, comm=MPI.COMM_SELF))
+            offset += len(rows)
+            first += n
+        lgmap = PETSc.LGMap().create(np.concatenate(to_global).astype(PETSc.IntType), comm=comm)
+        self.J.setLGMap(lgmap, lgmap)
+        lgmap.destroy()
+        return local_sets
 
     # --- SNES callbacks
     def _update_states(self, x) -> None:
@@ -392,27 +428,30 @@ class CoupledSNESSolver:
         t0 = time.perf_counter()
         self._update_states(x)
         cp = self.coupling
-        for k, blk in enumerate(self.blocks):
-            self.A[k].zeroEntries()
-            compat.assemble_matrix(self.A[k], self.J_forms[k], blk.bcs)
-        self.A[0].assemble()
-        self.A[1].assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
-        self.A[1].assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
-        self._add_hessian(cp.hessian())
-        self.A[1].assemble()
+        P.zeroEntries()
+        for blk, J_form, local in zip(self.blocks, self.J_forms, self._local_sets, strict=True):
+            block = P.getLocalSubMatrix(local, local)
+            compat.assemble_matrix_local(block, J_form, blk.bcs)
+            P.restoreLocalSubMatrix(local, local, block)
+        P.assemble(PETSc.Mat.AssemblyType.FLUSH)  # from adding to inserting
+        for blk, J_form, local in zip(self.blocks, self.J_forms, self._local_sets, strict=True):
+            block = P.getLocalSubMatrix(local, local)
+            compat.insert_diagonal(block, J_form, blk.bcs)
+            P.restoreLocalSubMatrix(local, local, block)
+        P.assemble(PETSc.Mat.AssemblyType.FLUSH)
+        add = PETSc.InsertMode.ADD_VALUES
+        H = cp.hessian()
+        if cp.owned.any():
+            P.setValues(self._coupled[cp.owned], self._coupled, H[cp.owned], addv=add)
         vectors = cp.mixed_vectors()
-        values = (
-            np.column_stack([v.array_r[self._rows] for v in vectors])
-            if len(self._rows)
-            else np.zeros((0, len(vectors)))
-        )
+        values = np.column_stack([v.array_r[self._rows] for v in vectors])
         for v in vectors:
             v.destroy()
-        self._fill_coupling_block(values)
-        self.C.transpose(self.CT)
-        nest = PETSc.Mat().createNest([[self.A[0], self.C], [self.CT, self.A[1]]], comm=self.comm)
-        nest.convert("aij", out=P)
-        nest.destroy()
+        if len(self._rows):
+            rows = (self._row_start + self._rows).astype(PETSc.IntType)
+            P.setValues(rows, self._coupled, values, addv=add)
+            P.setValues(self._coupled, rows, np.ascontiguousarray(values.T), addv=add)
+        P.assemble()
         if J.handle != P.handle:
             J.assemble()
         self.convergence.update_floor(P, x)
@@ -427,5 +466,5 @@ class CoupledSNESSolver:
         return result
 
     def destroy(self) -> None:
-        for obj in (self.snes, self.J, self.C, self.CT, self.x, self.r, *self.A, *self.b):
+        for obj in (self.snes, self.J, self.x, self.r, *self.b, *self._local_sets):
             obj.destroy()
