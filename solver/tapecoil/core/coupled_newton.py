@@ -11,8 +11,8 @@ and in the off-diagonal blocks. The joint matrix is one AIJ matrix: its pattern 
 PETSc MATNEST of the four blocks converted to AIJ, made once; at every Newton iteration each
 block's form is assembled straight into its diagonal block (a local reference, as DOLFINx's
 block assembly does, so that no form couples the two meshes) and the coupling's entries are
-added by their global rows and columns. Converting the MATNEST at every iteration instead cost
-a fifth of the Jacobian's time.
+added by their global rows and columns. Converting the MATNEST at every iteration instead took
+a quarter of the Jacobian's time on two ranks.
 
 The flat numbering is PETSc's for a MATNEST: each rank's rows of the first block, then its rows
 of the second.
