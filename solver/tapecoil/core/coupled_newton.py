@@ -267,8 +267,8 @@ class CoupledSNESSolver:
         # integrals see; every Jacobian sets all of them, zeros too, so the pattern is fixed
         self._rows = self._coupled_rows()
         self.J, self.index_sets = self._joint_matrix()
-        self._local_sets = self._set_local_numbering()
         self._row_start = self.J.getOwnershipRange()[0]
+        self._local_sets = self._set_local_numbering()
         self._coupled = self._joint_indices(coupling.global_dofs)
         self.x = self.J.createVecRight()
         self.r = self.J.createVecRight()
@@ -354,9 +354,9 @@ class CoupledSNESSolver:
         """Give the joint matrix a local numbering, each block's local dofs (owned, then ghosts,
         one index per dof) after the other, and return each block's local index set in it, for
         the forms' assembly through local references (collective)."""
-        comm, start = self.comm, self.J.getOwnershipRange()[0]
+        comm = self.comm
         to_global, local_sets, offset = [], [], 0
-        first = start
+        first = self._row_start
         for blk in self.blocks:
             V = blk.q.function_space
             index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
