@@ -340,37 +340,38 @@ class CoupledSNESSolver:
         J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         return J, index_sets
 
+    def _rank_starts(self, block: int) -> tuple[np.ndarray, np.ndarray]:
+        """For every rank, its first row of the block ``block`` (0 or 1) in the joint matrix and
+        its first dof in that block's own global numbering (collective)."""
+        V = self.blocks[block].q.function_space
+        first = self._row_start + (owned_size(self.blocks[0].q.function_space) if block else 0)
+        block_start = V.dofmap.index_map_bs * V.dofmap.index_map.local_range[0]
+        return np.array(self.comm.allgather(first)), np.array(self.comm.allgather(block_start))
+
     def _joint_indices(self, second: np.ndarray) -> np.ndarray:
         """Global rows of the joint matrix of dofs of the second block given by their global
         indices in that block (collective)."""
-        V = self.blocks[1].q.function_space
-        owned = np.array(self.comm.allgather(owned_size(V)))
-        starts = np.concatenate([[0], np.cumsum(owned)[:-1]])  # each rank's first dof of the block
-        first = np.array(self.comm.allgather(self._row_start + owned_size(self.blocks[0].q.function_space)))
+        firsts, starts = self._rank_starts(1)
         owner = np.searchsorted(starts, second, side="right") - 1
-        return (first[owner] + second - starts[owner]).astype(PETSc.IntType)
+        return (firsts[owner] + second - starts[owner]).astype(PETSc.IntType)
 
     def _set_local_numbering(self) -> list:
         """Give the joint matrix a local numbering, each block's local dofs (owned, then ghosts,
         one index per dof) after the other, and return each block's local index set in it, for
         the forms' assembly through local references (collective)."""
-        comm = self.comm
         to_global, local_sets, offset = [], [], 0
-        first = self._row_start
-        for blk in self.blocks:
+        for k, blk in enumerate(self.blocks):
             V = blk.q.function_space
             index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
-            n = owned_size(V)
-            firsts = np.array(comm.allgather(first))  # each rank's first joint row of this block
-            block_starts = np.array(comm.allgather(index_map.local_range[0]))
+            firsts, starts = self._rank_starts(k)
             owners = np.asarray(index_map.owners)
-            ghost_rows = firsts[owners] + bs * (np.asarray(index_map.ghosts) - block_starts[owners])
-            rows = np.concatenate([first + np.arange(n), (ghost_rows[:, None] + np.arange(bs)).reshape(-1)])
+            ghost_rows = firsts[owners] + bs * np.asarray(index_map.ghosts) - starts[owners]
+            owned_rows = firsts[self.comm.rank] + np.arange(owned_size(V))
+            rows = np.concatenate([owned_rows, (ghost_rows[:, None] + np.arange(bs)).reshape(-1)])
             to_global.append(rows)
             local_sets.append(PETSc.IS().createStride(len(rows), offset, 1, comm=MPI.COMM_SELF))
             offset += len(rows)
-            first += n
-        lgmap = PETSc.LGMap().create(np.concatenate(to_global).astype(PETSc.IntType), comm=comm)
+        lgmap = PETSc.LGMap().create(np.concatenate(to_global).astype(PETSc.IntType), comm=self.comm)
         self.J.setLGMap(lgmap, lgmap)
         lgmap.destroy()
         return local_sets
