@@ -35,7 +35,8 @@ def run(
     deployment starting from the coiling's stowed state; the coiling by ``config.model.kind``'s
     model (the hybrid's: :mod:`tapecoil.phases.hybrid_coiling_run`, its stowed state the full
     shell's); "payout" in place of "deployment" pays
-    the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`). ``resume``: go on
+    the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`; the hybrid's:
+    :mod:`tapecoil.phases.hybrid_payout`, from its own coil). ``resume``: go on
     from the directory's own checkpoints (stowed/, deployed/, paid_out/) as if the run had never stopped;
     ``coiling_checkpoint``: resume the coiling from that checkpoint instead. A stop signal (see
     :mod:`tapecoil.core.interrupt`) ends the run after its current step with everything written and
@@ -46,8 +47,9 @@ def run(
     from tapecoil.config.params import ConfigError
     from tapecoil.phases.coiling_run import run_coiling
     from tapecoil.phases.deployment_run import run_deployment
-    from tapecoil.phases.hybrid_coiling_run import coil_again, run_hybrid_coiling
+    from tapecoil.phases.hybrid_coiling_run import run_hybrid_coiling
     from tapecoil.phases.hybrid_deployment_run import run_hybrid_deployment
+    from tapecoil.phases.hybrid_payout import hybrid_coil_from, run_hybrid_payout
     from tapecoil.phases.payout import run_payout
 
     if "deployment" in phases and "payout" in phases:
@@ -86,15 +88,40 @@ def run(
                 else:
                     out["coiling"], model = run_coiling(*coiling_args, **coiling_kwargs)
             deploying = "deployment" in phases and (model is None or out["coiling"]["completed"])
+            paying_out = "payout" in phases and (model is None or out["coiling"]["completed"])
+            resume_payout = _own_checkpoint(directory / "paid_out", "payout") if resume else None
+            if paying_out and hybrid:
+                if resume_payout is None and hybrid_coiling is None:
+                    if model is None:  # a payout alone: from a hybrid coiling's stowed checkpoint
+                        model, hybrid_coiling = hybrid_coil_from(stowed, config, comm)
+                    else:
+                        hybrid_coiling = _coil_again(config, comm, "payout")
+                out["payout"] = run_hybrid_payout(
+                    config,
+                    directory,
+                    comm,
+                    model,
+                    hybrid_coiling,
+                    progress=progress,
+                    stop=stop,
+                    resume=resume_payout,
+                )
+            elif paying_out:
+                out["payout"], _ = run_payout(
+                    config,
+                    directory,
+                    comm,
+                    stowed=stowed,
+                    model=model,
+                    progress=progress,
+                    stop=stop,
+                    resume=resume_payout,
+                )
             if deploying and hybrid:
                 resume_deployment = _own_checkpoint(own_deployed, "deployment") if resume else None
                 done = resume_deployment is not None and read_meta(resume_deployment).get("completed")
                 if hybrid_coiling is None and not done:
-                    results.LOG.warning(
-                        "the hybrid's deployment starts from the hybrid's own coiled state, which "
-                        "the stowed checkpoint does not hold: coiling with the hybrid again"
-                    )
-                    hybrid_coiling = coil_again(config, comm)
+                    hybrid_coiling = _coil_again(config, comm, "deployment")
                 out["deployment"] = run_hybrid_deployment(
                     config,
                     directory,
@@ -116,17 +143,6 @@ def run(
                     stop=stop,
                     resume=_own_checkpoint(own_deployed, "deployment") if resume else None,
                 )
-            if "payout" in phases and (model is None or out["coiling"]["completed"]):
-                out["payout"], _ = run_payout(
-                    config,
-                    directory,
-                    comm,
-                    stowed=stowed,
-                    model=model,
-                    progress=progress,
-                    stop=stop,
-                    resume=_own_checkpoint(directory / "paid_out", "payout") if resume else None,
-                )
         from tapecoil.measures.separation import separation_measure
 
         for phase, phase_summary in out.items():
@@ -140,6 +156,19 @@ def run(
     finally:
         results.stop_log(handler)
     return summary
+
+
+def _coil_again(config: Config, comm, phase: str):
+    """The hybrid's coil computed again for its ``phase``: a resumed coiling's checkpoint that
+    does not hold the hybrid's own state (another model's, or an older one's)."""
+    from tapecoil.phases.hybrid_coiling_run import coil_again
+
+    results.LOG.warning(
+        "the hybrid's %s starts from the hybrid's own coiled state, which the stowed checkpoint "
+        "does not hold: coiling with the hybrid again",
+        phase,
+    )
+    return coil_again(config, comm)
 
 
 def _own_checkpoint(path: Path, phase: str) -> Path | None:

@@ -22,7 +22,8 @@ class ModelConfig:
             is carried into the full shell and settled there by one solve at the final hub
             angle (the stowed state); the hybrid then deploys from its own coiled state, its
             window following the lift-off, by generalized-alpha (deployment.rho_inf < 1), the
-            hub held or free (deployment.hub).
+            hub held or free (deployment.hub), or a driven hub pays it out (the payout, from
+            the hybrid's own coil).
         window_ahead: the hybrid's shell beyond the lift-off point [m] (the ploy region and a
             margin: with 0.15 m the outer turn's coiling tension came out 0.7 % low on the 0.5 m
             benchmark and 1.4 % low on a 1 m tape, with 0.2 m within its error of the full

@@ -37,6 +37,7 @@ from mpi4py import MPI
 
 from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
+from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.hub.contact import default_penalty, spiral_obstacle
 from tapecoil.hub.frame import HubFrame
@@ -45,9 +46,11 @@ from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.hybrid_problem import HybridProblem
 from tapecoil.models.tape_beam import tape_beam
 from tapecoil.models.window import carry_over, full_shell
+from tapecoil.models.window_settling import settle_placed
 from tapecoil.phases.coiling_run import CoilingRun
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.predictors import choose_predictor, wound_length
+from tapecoil.phases.root_loads import HybridRootLoads
 from tapecoil.phases.window_on_hub import ContactSettings, WindowOnHub
 
 __all__ = ["HybridCoiling", "WindowSettings"]
@@ -163,7 +166,9 @@ class HybridCoiling:
             cc.smoothing * tp.h,
         )
         self.angle = 0.0
+        self.pull = config.coiling.tension  # [N] at the free end (a payout may set its own)
         self.records: list[CoilingRecord] = []
+        self._root_loads = None  # (the hybrid, its root's loads), made when first read
         self.moves: list[tuple[float, float, float]] = []
         self.hybrid = self._build(0.0)
         self.moves.append((0.0, *self._ends(0.0)))
@@ -194,6 +199,7 @@ class HybridCoiling:
             self.contact,
             shift=self.predictor == "shift" and not released,
             released=released,
+            pull=self.pull,
             comm=self.comm,
             name=f"{name}_shell",
         )
@@ -238,7 +244,7 @@ class HybridCoiling:
             # the last element; with the pitch held the hybrid's free part stood higher and its
             # tape left the coil early (docs/hybrid.md, the free end)
             beam.hold(tip, (1, 2), rotation=(0, 2))
-            beam.end_load(tip, force=(config.coiling.tension, 0.0, 0.0), constant=True)
+            beam.end_load(tip, force=(self.pull, 0.0, 0.0), constant=True)
             if self.predictor == "shift":
                 # the straight part beyond the window runs towards the hub as the tape winds on
                 beam.slide(end - 1e-9 * tp.L, lambda a, b: wound_length(shell.contact, a, b))
@@ -313,8 +319,17 @@ class HybridCoiling:
             "station": where,
             "station_winding": behind,
             "outer_turn_radius": radius,
-            "coiling_tension_outer": self.config.coiling.tension - N,
+            "coiling_tension_outer": self.pull - N,
         }
+
+    def hub_torque(self) -> float:
+        """The torque [N m] the hub applies to the tape through the root's attachment, positive in
+        the coiling sense: the reaction of the beam's clamped root node, or of the window's root
+        edge when it holds the root, at the converged state (as the full shell's
+        :meth:`~tapecoil.phases.coiling.CoilingModel.hub_torque`; collective)."""
+        if self._root_loads is None or self._root_loads[0] is not self.hybrid:
+            self._root_loads = (self.hybrid, HybridRootLoads.at_rest(self.hybrid, self.frame))
+        return -self._root_loads[1]()["root_torque"]
 
     def wrap_axial_force(self) -> tuple[float, float]:
         """The axial force N [N] of the flattened beam on the first turn, mean and spread (max -
@@ -334,7 +349,7 @@ class HybridCoiling:
     # -- stepping -------------------------------------------------------------------------------
     def _record(self, step) -> None:
         self.angle = float(step.load)
-        self._next_step = float(step.next_step or step.step)
+        self._next_step = abs(float(step.next_step or step.step))  # forwards or back
         self.records.append(
             CoilingRecord(
                 self.angle,
@@ -367,26 +382,38 @@ class HybridCoiling:
         return records
 
     def coil(self, final_angle: float, on_step=None, stops: tuple[float, ...] = ()) -> None:
-        """Turn the hub from where it is to ``final_angle`` [rad], the window moved with the
-        lift-off, landing exactly on every hub angle in ``stops`` [rad] on the way (as the full
-        shell's :meth:`~tapecoil.phases.coiling_run.CoilingRun.coil`); ``on_step(record)``
-        after each converged step."""
+        """Turn the hub from where it is to ``final_angle`` [rad], forwards (coiling) or back (a
+        driven hub's payout), the window moved with the lift-off, landing exactly on every hub
+        angle in ``stops`` [rad] on the way (as the full shell's
+        :meth:`~tapecoil.phases.coiling_run.CoilingRun.coil`); ``on_step(record)`` after each
+        converged step (collective)."""
         if not hasattr(self, "_t0"):
             self._t0 = time.perf_counter()
         tp = self.config.tape
         rho = self.config.hub.radius + tp.h / 2
         bending = self.config.wall.bending
-        while self.angle < final_angle - 1e-12:
+        while abs(final_angle - self.angle) > 1e-12:
+            back = final_angle < self.angle
+            if self._leg is not None and abs(self._leg[0] - self.angle) <= 1e-12:
+                self._leg = None  # stopped on its last step: a restart takes the next leg
             if self._leg is None:
                 # moved before a solve, never after: the state a call leaves is a converged one
-                self._move_window()
-                ahead = [a for a in stops if self.angle + 1e-12 < a < final_angle]
-                target = min([final_angle, self.angle + self.move / rho, *ahead])
-                self._leg = (target, min(self.max_step, target - self.angle))
+                if back:
+                    self._move_window_back()
+                    # the lift-off runs down the coil by its own radius per radian: a leg lets
+                    # it travel no further than a move, so the shell keeps `behind` of coil
+                    turn = self.move / self.coil_geometry()["outer_radius"]
+                    between = [a for a in stops if final_angle < a < self.angle - 1e-12]
+                    target = max([final_angle, self.angle - turn, *between])
+                else:
+                    self._move_window()
+                    ahead = [a for a in stops if self.angle + 1e-12 < a < final_angle]
+                    target = min([final_angle, self.angle + self.move / rho, *ahead])
+                self._leg = (target, min(self.max_step, abs(target - self.angle)))
             # a leg is the hub's turn between window moves, its largest step set at its start (a
             # restarted run goes on with the leg it stopped in, as it would have)
             target, leg_step = self._leg
-            first = min(self._next_step, target - self.angle)
+            first = min(self._next_step, abs(target - self.angle))
 
             def record(step):
                 self._record(step)
@@ -413,6 +440,7 @@ class HybridCoiling:
         needs to go on from its last converged step as if never stopped (JSON-ready)."""
         return {
             "hub_angle": self.angle,
+            "pull": self.pull,
             "next_step": self._next_step,
             "moves": [list(move) for move in self.moves],
             "leg": None if self._leg is None else list(self._leg),
@@ -425,6 +453,7 @@ class HybridCoiling:
         self.moves = [tuple(move) for move in state["moves"]]
         self.records = [CoilingRecord(**{**r, "window": tuple(r["window"])}) for r in state["records"]]
         self.angle = float(state["hub_angle"])
+        self.pull = float(state.get("pull", self.config.coiling.tension))
         self._next_step = float(state["next_step"])
         self._leg = None if state["leg"] is None else tuple(state["leg"])
         self.hybrid = self.build(self.moves[-1][1], f"hybrid_coil{len(self.moves) - 1}")
@@ -442,7 +471,7 @@ class HybridCoiling:
         angle = self.angle if angle is None else angle
         x, psi = self._winding_along_line(hybrid, angle)
         model.set_hub_angle(angle)
-        model.tension.value = self.config.coiling.tension
+        model.tension.value = self.pull
         carry_over(hybrid, full_shell(model.model))
         self._set_shell_winding(model.contact, x, psi, angle)
 
@@ -484,3 +513,54 @@ class HybridCoiling:
         self.carry_winding(old, new)
         self.hybrid = new
         self.moves.append((self.angle, *self._ends(new_start)))
+
+    def start_back(self, lift: float, start: float, reach: float = 0.0) -> float | None:
+        """The new start [m], nearer the root, of a window starting at ``start`` [m] for the
+        lift-off at ``lift`` [m] running down the coil (a deployment, a payout), None to stay:
+        once the lift-off has come within ``behind + reach`` of the start (``reach``: how far it
+        may run before the next look), ``behind + move`` behind it (on the elements' grid), so
+        that at least ``behind`` of the coil is always shell, as when coiling."""
+        near = self.window.behind + reach - 1e-9 * self.config.tape.L
+        if start <= 0.0 or lift - start >= near:
+            return None
+        wanted = self.element * math.floor((lift - self.window.behind - self.move) / self.element + 1e-9)
+        return max(min(wanted, start - self.element), 0.0)
+
+    def _move_window_back(self) -> None:
+        """The window moved towards the root as the hub turns back (the flattened beam on the
+        coil becomes shell, the shell beyond the window's new end arc beam), the sections placed
+        from the beam settled on the coil (:func:`~tapecoil.models.window_settling.settle_placed`);
+        a settling that fails stops with the last converged state (collective)."""
+        # looked at once a leg, over which the lift-off runs down by up to a move
+        start = self.hybrid.shell.surface.xi_range[0][0]
+        new_start = self.start_back(self.lift_off(), start, reach=self.move)
+        if new_start is None:
+            return
+        old = self.hybrid
+        new = self._build(new_start)
+        carry_over(old, new)
+        self.carry_winding(old, new)
+        settling = settle_placed(new, old.shell.surface.xi_range[0], self.config)
+        if not settling["converged"]:
+            raise ContinuationError(
+                f"the hybrid's window moved back to {new_start:.4g} m at {self.angle:.6g} rad: the "
+                f"sections placed from the flattened beam did not settle on the coil "
+                f"({settling['iterations']} Newton iterations); use the full shell "
+                f"(model.kind = 'shell'). Last converged hub angle {self.angle:.6g} rad",
+                self.angle,
+            )
+        self.hybrid = new
+        self.moves.append((self.angle, *self._ends(new_start)))
+
+    def set_pull(self, pull: float) -> None:
+        """Pull the free end with ``pull`` [N] from the next step on: the hybrid built again on
+        its window with that pull and its state carried over node by node (collective)."""
+        if pull == self.pull:
+            return
+        self.pull = float(pull)
+        old = self.hybrid
+        start = old.shell.surface.xi_range[0][0]
+        self.hybrid = self._build(start)
+        carry_over(old, self.hybrid)
+        self.carry_winding(old, self.hybrid)
+        self.moves.append((self.angle, *self._ends(start)))

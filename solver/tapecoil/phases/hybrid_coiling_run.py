@@ -130,11 +130,12 @@ class HybridCoilingPhase(HubTurningPhase):
         """What the step measured: the hybrid's energy and forces, the whole tape's geometry (the
         full shell in the hybrid's configuration) with the shell's coiling's column names."""
         coiling, config = self.coiling, self.config
-        pull = config.coiling.tension
+        pull = coiling.pull
         geometry = coiling.coil_geometry()
         lam = lift_off(self.model.tape)["lambda"]
         start, end = coiling.hybrid.shell.surface.xi_range[0]
-        outer = coiling.outer_turn_tension() if phase == "coil" else None
+        turning = phase != "flatten"
+        outer = coiling.outer_turn_tension() if turning else None
         if outer is None:
             outer_columns = dict.fromkeys(OUTER_TURN_COLUMNS, "")
         else:
@@ -157,6 +158,7 @@ class HybridCoilingPhase(HubTurningPhase):
             "tension": pull,
             "root_tension": root_tension,
             "coiling_tension": pull - root_tension,
+            "hub_torque_reaction": coiling.hub_torque() if turning else "",
             "strain_energy": coiling.strain_energy(),
             "max_penetration": self.model.tape.max_penetration(),
             "coiled_length": geometry["coiled_length"],

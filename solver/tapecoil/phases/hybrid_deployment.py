@@ -334,7 +334,7 @@ class HybridDeployment:
         self.measures = HybridDeploymentMeasures(
             hybrid, motion, self.coiling.frame, self.angle, cfg.tape, reach
         )
-        self.root_loads = HybridRootLoads(motion, self.coiling.frame)
+        self.root_loads = HybridRootLoads.in_time(motion, self.coiling.frame)
         if self.rotor is not None:
             self.free_hub = self._free_hub(motion)
         return motion
@@ -372,14 +372,9 @@ class HybridDeployment:
         """The window's new start [m] for the lift-off at ``lift`` [m], None to stay: once the
         lift-off has come within ``behind`` of the start, ``behind + move`` behind it (on the
         elements' grid), so that, as in coiling, at least ``behind`` of the coil is always shell."""
-        c = self.coiling
-        start, _ = self.window()
-        if start <= 0.0 or self.time < self.config.deployment.release_time:
+        if self.time < self.config.deployment.release_time:
             return None
-        if lift - start >= c.window.behind - 1e-9 * self.config.tape.L:
-            return None
-        wanted = c.element * math.floor((lift - c.window.behind - c.move) / c.element + 1e-9)
-        return max(min(wanted, start - c.element), 0.0)
+        return self.coiling.start_back(lift, self.window()[0])
 
     def _move(self, start: float) -> None:
         old, motion = self.hybrid, self.motion

@@ -54,7 +54,34 @@ def check_payout(config: Config, stowed_angle: float) -> None:
         )
 
 
-class PayoutPhase(HubTurningPhase):
+class PayoutReport:
+    """What a payout phase reports, whichever model turns its hub back: its progress, its end's
+    log line and its summary. The phase sets ``start``, ``target`` (hub angles [rad]), ``pull``
+    [N] and a ``history`` of payout rows, and its ``model`` is the full shell (in the payout's
+    state)."""
+
+    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
+        return row["hub_angle"], row["step"], row["newton_iterations"], f" lambda {row['lambda']:.3f}", True
+
+    def end_log(self, summary: dict) -> str:
+        line = super().end_log(summary)
+        return line + f", lambda {self.history[-1]['lambda']:.3f}" if self.history else line
+
+    def summary(self, interrupted, t_start: float) -> dict:
+        return {
+            "completed": self.completed,
+            "message": self.message,
+            "interrupted": None if interrupted is None else interrupted.name,
+            "hub_angle": self.model.root.angle,
+            "start_hub_angle": self.start,
+            "target_hub_angle": self.target,
+            "tension": self.pull,
+            "measures": payout_measures(self.model.config, self.history),
+            "run": self.run_figures(len(self.history), t_start),
+        }
+
+
+class PayoutPhase(PayoutReport, HubTurningPhase):
     """The driven hub's payout as a phase of :func:`~tapecoil.phases.runner.run_phase`."""
 
     name, checkpoint_name = "payout", "paid_out"
@@ -81,30 +108,10 @@ class PayoutPhase(HubTurningPhase):
         if self.on_row is not None:
             self.on_row(row)
 
-    def progress(self, row: dict) -> tuple[float, float, int, str, bool]:
-        return row["hub_angle"], row["step"], row["newton_iterations"], f" lambda {row['lambda']:.3f}", True
-
     def advance(self) -> None:
         self.model.tension.value = self.pull
         self.run.coil(self.target, start_angle=self.model.root.angle, first_step=self.run.next_step)
         self.completed = True
-
-    def end_log(self, summary: dict) -> str:
-        line = super().end_log(summary)
-        return line + f", lambda {self.history[-1]['lambda']:.3f}" if self.history else line
-
-    def summary(self, interrupted, t_start: float) -> dict:
-        return {
-            "completed": self.completed,
-            "message": self.message,
-            "interrupted": None if interrupted is None else interrupted.name,
-            "hub_angle": self.model.root.angle,
-            "start_hub_angle": self.start,
-            "target_hub_angle": self.target,
-            "tension": self.pull,
-            "measures": payout_measures(self.model.config, self.history),
-            "run": self.run_figures(len(self.history), t_start),
-        }
 
 
 def run_payout(

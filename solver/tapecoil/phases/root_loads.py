@@ -105,32 +105,46 @@ class RootLoads:
 
 
 class HybridRootLoads:
-    """The root's loads on the hub of the shell-beam hybrid in time (a
-    :class:`~tapecoil.phases.hybrid_motion.HybridMotion` of a hybrid on the hub of ``frame``):
-    the reaction of the beam's clamped root node while the shell window starts past the root,
-    of the window's attached root edge once it starts there, each the equation of motion at the
-    converged state t_{n+1} on the held dofs, as the full shell's (:class:`RootLoads`); call it
-    after a converged step, once the motion has committed it (collective)."""
+    """The root's loads on the hub of the shell-beam ``hybrid`` on the hub of ``frame``: the
+    reaction of the beam's clamped root node while the shell window starts past the root, of the
+    window's attached root edge once it starts there, each the residual ``shell_form`` or
+    ``beam_form`` on the held dofs at the converged state, as the full shell's
+    (:class:`RootLoads`). :meth:`in_time` reads the equation of motion, :meth:`at_rest` the
+    equilibrium of the quasi-static hybrid; call it after a converged, committed step
+    (collective)."""
 
-    def __init__(self, motion, frame, eps: float = 1e-6):
-        shell, beam = motion.hybrid.shell, motion.hybrid.beam
+    def __init__(self, hybrid, frame, shell_form, beam_form, eps: float = 1e-6):
+        shell, beam = hybrid.shell, hybrid.beam
         self.frame, self.eps, self.comm = frame, eps, shell.comm
         self.shell = shell.root is not None
         if self.shell:  # the window's own root, attached to the hub
             model = shell.model
-            form = motion.shell_forms.inertia_at_end() + shell.forms()[0] - motion.shell_weight
+            form = shell_form
             self.model, self.nodes = model, shell.contact.nodes
             held = owned_constrained_dofs(model.W, shell.root.bcs)
             n_owned = self.nodes.space.dofmap.index_map.size_local
             self.root = np.flatnonzero(np.isin(self.nodes.u_dofs[:n_owned, 0], held))
         else:  # the beam's root node, clamped to the hub
             model = beam.model
-            form = motion.beam.reaction_form
+            form = beam_form
             self.model = model
             held = owned_constrained_dofs(model.W, beam.bcs)
             self.root = np.flatnonzero(np.isin(model.node_u_dofs[:, 0], held))
         self.form = dolfinx.fem.form(form)
         self.reaction = dolfinx.fem.Function(self.model.W)
+
+    @classmethod
+    def in_time(cls, motion, frame, eps: float = 1e-6) -> HybridRootLoads:
+        """Of a :class:`~tapecoil.phases.hybrid_motion.HybridMotion`'s hybrid: its equation of
+        motion at t_{n+1}, once the motion has committed the step."""
+        shell = motion.hybrid.shell
+        shell_form = motion.shell_forms.inertia_at_end() + shell.forms()[0] - motion.shell_weight
+        return cls(motion.hybrid, frame, shell_form, motion.beam.reaction_form, eps)
+
+    @classmethod
+    def at_rest(cls, hybrid, frame, eps: float = 1e-6) -> HybridRootLoads:
+        """Of a quasi-static hybrid (coiling, a driven hub's payout): its energy's gradient."""
+        return cls(hybrid, frame, hybrid.shell.forms()[0], hybrid.beam.forms()[0], eps)
 
     def __call__(self) -> dict[str, float]:
         assemble_into(self.reaction, self.form)

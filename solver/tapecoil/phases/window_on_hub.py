@@ -48,7 +48,8 @@ class WindowOnHub(ShellProblem):
     """The hybrid's shell window from ``start`` [m] along the tape, ``length`` [m] long, on the
     hub of ``frame``: the contact of its face with the hub and the turns beneath
     (:class:`CoilContact`, the spiral), the root attached to the hub when the window starts at
-    the root, the free end's guide and pull ``tension`` [N] when it ends at the free end, unless
+    the root, the free end's guide and pull ``pull`` [N] (by default ``coiling.tension``) when it
+    ends at the free end, unless
     ``released`` (the end then free, as a deploying tape's: :class:`~tapecoil.phases.release.EndHold`
     lets it go, the window standing in for the tape there).
 
@@ -66,6 +67,7 @@ class WindowOnHub(ShellProblem):
         *,
         shift: bool = False,
         released: bool = False,
+        pull: float | None = None,
         comm=MPI.COMM_WORLD,
         name: str = "window",
     ):
@@ -99,7 +101,8 @@ class WindowOnHub(ShellProblem):
             free_end = self.strip.facet_tags.find(FREE_END)
             self.bcs += [facet_condition(model, sub, free_end)[1] for sub in _GUIDE_COMPONENTS]
             # T spread evenly over the free end's arc, as the full shell's pull
-            energy = energy - config.coiling.tension * model.u[0] / tp.b * model.ds(FREE_END)
+            pull = config.coiling.tension if pull is None else pull
+            energy = energy - pull * model.u[0] / tp.b * model.ds(FREE_END)
         self._energy = energy
         self._strain_form = self._root_form = self._sections = None  # made when first read
 

@@ -104,6 +104,11 @@ def coiling_energies(directory: Path) -> Path | None:
     return _save(fig, figures / "coiling_energies.png")
 
 
+def _model_name(config) -> str:
+    """The model a run's rows come from, for the legends."""
+    return "hybrid" if config.model.kind == "hybrid" else "shell"
+
+
 def coiling_forces(directory: Path) -> Path | None:
     """Tension at the free end, coiling tension T - N against Eq. 2.6 (and, on the outer turn,
     against Eq. 4.5 and Eq. 2.6 with the free edges' share), hub torque against steady coiling."""
@@ -112,6 +117,7 @@ def coiling_forces(directory: Path) -> Path | None:
         return None
     config, _, figures = _setup(directory)
     tp, r_hub, T = config.tape, config.hub.radius, config.coiling.tension
+    model = _model_name(config)
     angle = h["hub_angle"]
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
     ax[0].plot(angle, h["tension"], label="pull held at the free end")
@@ -133,12 +139,12 @@ def coiling_forces(directory: Path) -> Path | None:
     ax[0].set(xlabel="hub angle [rad]", ylabel="force [N]", title="tension")
     rho = np.array([theory.outer_radius_after_rotation(a, r_hub, tp.h) for a in angle]) - tp.h / 2
     steady = rho * (T + tp.b * theory.energy_density(rho, tp.R, config.wall.bending, config.coiling.sense))
-    if "hub_torque" in h:  # not measured by the hybrid
+    if "hub_torque" in h:  # the energy balance: not measured by the hybrid
         ax[1].plot(angle, h["hub_torque"] * 1e3, ".-", label="shell (secant of the energy balance)")
     if "hub_torque_reaction" in h:
-        ax[1].plot(angle, h["hub_torque_reaction"] * 1e3, "-", label="shell (the root's reactions)")
+        ax[1].plot(angle, h["hub_torque_reaction"] * 1e3, "-", label=f"{model} (the root's reactions)")
     ax[1].plot(angle, steady * 1e3, "--", label="steady coiling r (T + b w(r))")
-    title = "hub torque" if "hub_torque" in h else "hub torque (not measured by the hybrid)"
+    title = "hub torque" if "hub_torque" in h else "hub torque (the hybrid's from the root's reactions)"
     ax[1].set(xlabel="hub angle [rad]", ylabel="hub torque [N mm]", title=title)
     return _save(fig, figures / "coiling_forces.png")
 
@@ -350,10 +356,11 @@ def payout_forces(directory: Path) -> Path | None:
         return None
     config, _, figures = _setup(directory)
     tp = config.tape
+    model = _model_name(config)
     lam = h["lambda"]
     order = np.argsort(lam)
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
-    ax[0].plot(lam, h["coiling_tension_outer"], ".", ms=3, label="T - N on the outer turn (shell)")
+    ax[0].plot(lam, h["coiling_tension_outer"], ".", ms=3, label=f"T - N on the outer turn ({model})")
     ax[0].plot(lam[order], h["eq_4_5"][order], "k-", lw=1.2, label="Eq. 4.5, mid-surface radius rho(lambda)")
     ax[0].plot(lam, h["eq_2_6_outer"], "k:", lw=1, label="Eq. 2.6 at the outer turn's measured radius")
     if "eq_2_6_edges_outer" in h and np.isfinite(h["eq_2_6_edges_outer"]).any():
@@ -364,12 +371,12 @@ def payout_forces(directory: Path) -> Path | None:
             lw=1,
             label="the same with the free edges' share (edge layer)",
         )
-    ax[0].plot(lam, h["coiling_tension"], ".", ms=3, label="T - N at the root (shell)")
+    ax[0].plot(lam, h["coiling_tension"], ".", ms=3, label=f"T - N at the root ({model})")
     rho = config.hub.radius + tp.h / 2
     root = theory.coiling_tension_bending(config.wall.bending, tp.alpha, tp.R, rho)
     ax[0].axhline(root, color="k", ls="--", lw=1, label=f"Eq. 2.6 at the first turn: {root:.3f} N")
     ax[0].set(xlabel="deployed fraction lambda", ylabel="force [N]", title="coiling tension, driven hub")
-    ax[1].plot(lam, h["hub_torque_reaction"] * 1e3, ".", ms=3, label="shell (the root's reactions)")
+    ax[1].plot(lam, h["hub_torque_reaction"] * 1e3, ".", ms=3, label=f"{model} (the root's reactions)")
     ax[1].plot(
         lam[order], h["steady_torque"][order] * 1e3, "k--", lw=1, label="steady coiling rho (T + b w(rho))"
     )
