@@ -122,6 +122,26 @@ def test_a_payout_alone_starts_from_the_hybrids_stowed_coil(tmp_path, paid_out):
     assert not (tmp_path / "refused" / "payout_history.csv").exists()
 
 
+def test_the_payouts_pull_acts_on_the_hybrid():
+    """``payout.tension`` acts: the coarse tape coiled by the hybrid to 6 rad with the coiling's
+    pull (1 N), then turned back by 0.5 rad with 1.5 N, carries 1.5 N in its free part: the arc
+    beam's axial force beyond the window (read from its strains, not from the load; the free
+    part leaves the guide line at a small slope)."""
+    from tapecoil.phases.hybrid_coiling import HybridCoiling
+
+    config = payout_config("hybrid", tension=1.5)
+    coiling = HybridCoiling(config, MPI.COMM_SELF)
+    coiling.flatten()
+    coiling.coil(config.coiling.hub_angle)
+    coiling.set_pull(config.payout.tension)
+    coiling.coil(config.coiling.hub_angle - 0.5)
+    assert coiling.pull == 1.5 and coiling.records[-1].hub_angle == pytest.approx(5.5)
+    x, N = coiling.hybrid.beam.axial_force()
+    free = x[:, 0] > coiling.hybrid.shell.surface.xi_range[0][1] + 0.05
+    assert free.sum() > 5
+    np.testing.assert_allclose(N[free], 1.5, rtol=0.01)
+
+
 @pytest.mark.mpi
 def test_two_ranks_pay_out_the_hybrid_as_one():
     """The coarse tape coiled by the hybrid to 6 rad and paid out to lambda = 0.88 (the window

@@ -507,12 +507,20 @@ class HybridCoiling:
         new_start = min(wanted, tp.L - self.window_length)
         if new_start <= start:
             return
-        old = self.hybrid
-        new = self._build(new_start)
-        carry_over(old, new)
-        self.carry_winding(old, new)
+        self._adopt(self._carried(new_start), new_start)
+
+    def _carried(self, start: float) -> HybridProblem:
+        """A new hybrid with its window from ``start`` [m] (and this coiling's pull), this one's
+        state and winding angles carried into it (collective)."""
+        new = self._build(start)
+        carry_over(self.hybrid, new)
+        self.carry_winding(self.hybrid, new)
+        return new
+
+    def _adopt(self, new: HybridProblem, start: float) -> None:
+        """Go on with ``new``, its window from ``start`` [m], recorded among the moves."""
         self.hybrid = new
-        self.moves.append((self.angle, *self._ends(new_start)))
+        self.moves.append((self.angle, *self._ends(start)))
 
     def start_back(self, lift: float, start: float, reach: float = 0.0) -> float | None:
         """The new start [m], nearer the root, of a window starting at ``start`` [m] for the
@@ -536,11 +544,9 @@ class HybridCoiling:
         new_start = self.start_back(self.lift_off(), start, reach=self.move)
         if new_start is None:
             return
-        old = self.hybrid
-        new = self._build(new_start)
-        carry_over(old, new)
-        self.carry_winding(old, new)
-        settling = settle_placed(new, old.shell.surface.xi_range[0], self.config)
+        old_window = self.hybrid.shell.surface.xi_range[0]
+        new = self._carried(new_start)
+        settling = settle_placed(new, old_window, self.config)
         if not settling["converged"]:
             raise ContinuationError(
                 f"the hybrid's window moved back to {new_start:.4g} m at {self.angle:.6g} rad: the "
@@ -549,8 +555,7 @@ class HybridCoiling:
                 f"(model.kind = 'shell'). Last converged hub angle {self.angle:.6g} rad",
                 self.angle,
             )
-        self.hybrid = new
-        self.moves.append((self.angle, *self._ends(new_start)))
+        self._adopt(new, new_start)
 
     def set_pull(self, pull: float) -> None:
         """Pull the free end with ``pull`` [N] from the next step on: the hybrid built again on
@@ -558,9 +563,5 @@ class HybridCoiling:
         if pull == self.pull:
             return
         self.pull = float(pull)
-        old = self.hybrid
-        start = old.shell.surface.xi_range[0][0]
-        self.hybrid = self._build(start)
-        carry_over(old, self.hybrid)
-        self.carry_winding(old, self.hybrid)
-        self.moves.append((self.angle, *self._ends(start)))
+        start = self.hybrid.shell.surface.xi_range[0][0]
+        self._adopt(self._carried(start), start)
