@@ -169,9 +169,10 @@ def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path)
     2 ms of deployment): the coiling's summary names its measures as the shell's does, the
     hybrid's own strain energy is within 0.5 % of the settled full shell's (measured 0.05 % at 5
     rad), the stowed checkpoint is the settled full shell's and deploys, a resumed run
-    returns the completed coiling's summary without coiling again, and the report draws the
+    returns the completed coiling's summary without coiling again, the report draws the
     hybrid's history (the root's loads on the hub among it) and says how the stowed state was
-    made."""
+    made, and a deployment alone from the stowed checkpoint (the hybrid's coil in its tables)
+    is the run's, row by row."""
     import json
 
     from tapecoil.app.pipeline import run
@@ -243,6 +244,13 @@ def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path)
     assert resumed["deployment"]["run"]["steps"] == deployment["run"]["steps"]
     assert resumed["deployment"]["measures"]["lambda0"] == deployment["measures"]["lambda0"]
     assert json.loads((out / "summary.json").read_text())["coiling"]["run"]["model"] == "hybrid"
+    # a deployment alone from the hybrid's stowed coil (tapecoil deploy STOWED) is the run's
+    alone = tmp_path / "alone"
+    deployed_alone = run(config, alone, phases=("deployment",), stowed=out / "stowed", progress=False)
+    assert deployed_alone["deployment"]["time"] == pytest.approx(2e-3)
+    a, b = read_history(alone / "deployment_history.csv"), read_history(out / "deployment_history.csv")
+    for column in ("time", "lambda", "strain_energy", "kinetic_energy", "window_start"):
+        np.testing.assert_allclose(a[column], b[column], rtol=1e-9, atol=1e-14, err_msg=column)
 
 
 def test_the_beam_contact_key_reaches_the_window_settings():

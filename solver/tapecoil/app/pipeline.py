@@ -36,7 +36,9 @@ def run(
     model (the hybrid's: :mod:`tapecoil.phases.hybrid_coiling_run`, its stowed state the full
     shell's); "payout" in place of "deployment" pays
     the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`; the hybrid's:
-    :mod:`tapecoil.phases.hybrid_payout`, from its own coil). ``resume``: go on
+    :mod:`tapecoil.phases.hybrid_payout`, from its own coil). With ``model.kind = "hybrid"`` a
+    deployment or payout alone starts from the hybrid's coil in the stowed checkpoint of a
+    coiling by the hybrid. ``resume``: go on
     from the directory's own checkpoints (stowed/, deployed/, paid_out/) as if the run had never stopped;
     ``coiling_checkpoint``: resume the coiling from that checkpoint instead. A stop signal (see
     :mod:`tapecoil.core.interrupt`) ends the run after its current step with everything written and
@@ -55,11 +57,6 @@ def run(
     if "deployment" in phases and "payout" in phases:
         raise ValueError("a run deploys the stowed tape or pays it out, not both")
     hybrid = config.model.kind == "hybrid"
-    if hybrid and "deployment" in phases and "coiling" not in phases:
-        raise ValueError(
-            "model.kind = 'hybrid' deploys the tape its own coiling left, in the same run: run "
-            "both phases (tapecoil run), or set model.kind = 'shell' to deploy a stowed checkpoint"
-        )
     if "deployment" in phases:
         need = hybrid_deployment_need(config)
         if need is not None:
@@ -120,7 +117,9 @@ def run(
             if deploying and hybrid:
                 resume_deployment = _own_checkpoint(own_deployed, "deployment") if resume else None
                 done = resume_deployment is not None and read_meta(resume_deployment).get("completed")
-                if hybrid_coiling is None and not done:
+                if model is None:  # a deployment alone: from a hybrid coiling's stowed checkpoint
+                    model, hybrid_coiling = hybrid_coil_from(stowed, config, comm)
+                elif hybrid_coiling is None and not done:
                     hybrid_coiling = _coil_again(config, comm, "deployment")
                 out["deployment"] = run_hybrid_deployment(
                     config,

@@ -78,8 +78,9 @@ def hybrid_coil_from(
     stowed: str | Path, config: Config, comm=MPI.COMM_WORLD
 ) -> tuple[CoilingModel, HybridCoiling]:
     """The full shell and the hybrid's own coil of the stowed checkpoint of a completed coiling by
-    the hybrid (``tapecoil coil --model hybrid``: its tables hold the hybrid's state); refused,
-    before anything is computed, for any other checkpoint (collective)."""
+    the hybrid (``tapecoil coil --model hybrid``: its tables hold the hybrid's state), which the
+    hybrid's payout and deployment alone start from; refused, before anything is computed, for
+    any other checkpoint (collective)."""
     from tapecoil.core.checkpoint import is_checkpoint
 
     meta = read_meta(stowed) if is_checkpoint(Path(stowed)) else {}
@@ -90,8 +91,8 @@ def hybrid_coil_from(
     if tables is None:
         raise ValueError(
             f"{stowed} is not the stowed checkpoint of a completed coiling by the hybrid, which the "
-            "hybrid's payout starts from (model.kind = 'hybrid'): coil with --model hybrid first, "
-            "or pay out with the full shell (model.kind = 'shell')"
+            "hybrid's payout and deployment start from (model.kind = 'hybrid'): coil with --model "
+            "hybrid first, or use the full shell (model.kind = 'shell')"
         )
     model, _ = read_checkpoint(stowed, config, comm)
     coiling = HybridCoiling(config, comm)
