@@ -51,7 +51,7 @@ def run(
     from tapecoil.phases.deployment_run import run_deployment
     from tapecoil.phases.hybrid_coiling_run import run_hybrid_coiling
     from tapecoil.phases.hybrid_deployment_run import run_hybrid_deployment
-    from tapecoil.phases.hybrid_payout import hybrid_coil_from, run_hybrid_payout
+    from tapecoil.phases.hybrid_payout import run_hybrid_payout
     from tapecoil.phases.payout import run_payout
 
     if "deployment" in phases and "payout" in phases:
@@ -88,11 +88,10 @@ def run(
             paying_out = "payout" in phases and (model is None or out["coiling"]["completed"])
             resume_payout = _own_checkpoint(directory / "paid_out", "payout") if resume else None
             if paying_out and hybrid:
-                if resume_payout is None and hybrid_coiling is None:
-                    if model is None:  # a payout alone: from a hybrid coiling's stowed checkpoint
-                        model, hybrid_coiling = hybrid_coil_from(stowed, config, comm)
-                    else:
-                        hybrid_coiling = _coil_again(config, comm, "payout")
+                if resume_payout is None:  # a resumed payout's checkpoint holds its hybrid
+                    model, hybrid_coiling = _hybrid_start(
+                        config, comm, model, hybrid_coiling, stowed, "payout"
+                    )
                 out["payout"] = run_hybrid_payout(
                     config,
                     directory,
@@ -117,10 +116,10 @@ def run(
             if deploying and hybrid:
                 resume_deployment = _own_checkpoint(own_deployed, "deployment") if resume else None
                 done = resume_deployment is not None and read_meta(resume_deployment).get("completed")
-                if model is None:  # a deployment alone: from a hybrid coiling's stowed checkpoint
-                    model, hybrid_coiling = hybrid_coil_from(stowed, config, comm)
-                elif hybrid_coiling is None and not done:
-                    hybrid_coiling = _coil_again(config, comm, "deployment")
+                if model is None or not done:
+                    model, hybrid_coiling = _hybrid_start(
+                        config, comm, model, hybrid_coiling, stowed, "deployment"
+                    )
                 out["deployment"] = run_hybrid_deployment(
                     config,
                     directory,
@@ -157,17 +156,24 @@ def run(
     return summary
 
 
-def _coil_again(config: Config, comm, phase: str):
-    """The hybrid's coil computed again for its ``phase``: a resumed coiling's checkpoint that
-    does not hold the hybrid's own state (another model's, or an older one's)."""
+def _hybrid_start(config: Config, comm, model, coiling, stowed, phase: str):
+    """The full shell and the hybrid's own coil that the hybrid's ``phase`` (after the coiling)
+    starts from: the run's own (``model``, ``coiling``); a phase alone's from the hybrid coiling's
+    ``stowed`` checkpoint; computed again where a resumed coiling's checkpoint does not hold
+    the hybrid's state (another model's, or an older one's)."""
     from tapecoil.phases.hybrid_coiling_run import coil_again
+    from tapecoil.phases.hybrid_payout import hybrid_coil_from
 
-    results.LOG.warning(
-        "the hybrid's %s starts from the hybrid's own coiled state, which the stowed checkpoint "
-        "does not hold: coiling with the hybrid again",
-        phase,
-    )
-    return coil_again(config, comm)
+    if model is None:
+        return hybrid_coil_from(stowed, config, comm)
+    if coiling is None:
+        results.LOG.warning(
+            "the hybrid's %s starts from the hybrid's own coiled state, which the stowed "
+            "checkpoint does not hold: coiling with the hybrid again",
+            phase,
+        )
+        coiling = coil_again(config, comm)
+    return model, coiling
 
 
 def _own_checkpoint(path: Path, phase: str) -> Path | None:

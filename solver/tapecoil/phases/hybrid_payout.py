@@ -85,9 +85,8 @@ def hybrid_coil_from(
 
     meta = read_meta(stowed) if is_checkpoint(Path(stowed)) else {}
     restart = meta.get("run") or {}
-    tables = read_tables(stowed) if meta else None
-    if not (meta.get("completed") and restart.get("model") == "hybrid" and restart.get("coiling")):
-        tables = None
+    ours = meta.get("completed") and restart.get("model") == "hybrid" and restart.get("coiling")
+    tables = read_tables(stowed) if ours else None
     if tables is None:
         raise ValueError(
             f"{stowed} is not the stowed checkpoint of a completed coiling by the hybrid, which the "

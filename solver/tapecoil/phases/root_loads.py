@@ -119,18 +119,16 @@ class HybridRootLoads:
         self.shell = shell.root is not None
         if self.shell:  # the window's own root, attached to the hub
             model = shell.model
-            form = shell_form
             self.model, self.nodes = model, shell.contact.nodes
             held = owned_constrained_dofs(model.W, shell.root.bcs)
             n_owned = self.nodes.space.dofmap.index_map.size_local
             self.root = np.flatnonzero(np.isin(self.nodes.u_dofs[:n_owned, 0], held))
         else:  # the beam's root node, clamped to the hub
             model = beam.model
-            form = beam_form
             self.model = model
             held = owned_constrained_dofs(model.W, beam.bcs)
             self.root = np.flatnonzero(np.isin(model.node_u_dofs[:, 0], held))
-        self.form = dolfinx.fem.form(form)
+        self.form = dolfinx.fem.form(shell_form if self.shell else beam_form)
         self.reaction = dolfinx.fem.Function(self.model.W)
 
     @classmethod
