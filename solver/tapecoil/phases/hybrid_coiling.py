@@ -113,7 +113,9 @@ class HybridCoiling:
     ``max_step`` [rad] (by default the full shell's coiling's: ``coiling.max_step``, else its
     predictor's). Each window's joint solver reads PETSc options under the prefix
     ``hybrid_coil<k>_``, k the window's number from 0; ``solver.petsc_options`` and
-    ``coiling.petsc_options`` reach all of them."""
+    ``coiling.petsc_options`` reach all of them. ``restart`` and ``tables``: a
+    :meth:`restart_state` and the tables of its hybrid to go on from (:meth:`restore`), its
+    window built where it was instead of at the root."""
 
     def __init__(
         self,
@@ -122,6 +124,8 @@ class HybridCoiling:
         window: WindowSettings | None = None,
         first_step: float = 0.1,
         max_step: float | None = None,
+        restart: dict | None = None,
+        tables: dict | None = None,
     ):
         self.config, self.comm = config, comm
         self.window = window or WindowSettings.from_config(config.model)
@@ -170,10 +174,13 @@ class HybridCoiling:
         self.records: list[CoilingRecord] = []
         self._root_loads = None  # (the hybrid, its root's loads), made when first read
         self.moves: list[tuple[float, float, float]] = []
-        self.hybrid = self._build(0.0)
-        self.moves.append((0.0, *self._ends(0.0)))
         self._next_step = self.first_step
         self._leg: tuple[float, float] | None = None  # the leg being turned: its end and largest step
+        if restart is not None:
+            self.restore(restart, tables)
+        else:
+            self.hybrid = self._build(0.0)
+            self.moves.append((0.0, *self._ends(0.0)))
 
     def _ends(self, start: float) -> tuple[float, float]:
         return start, min(start + self.window_length, self.config.tape.L)

@@ -290,8 +290,13 @@ def run_hybrid_coiling(
             model, _ = read_checkpoint(resume, config, comm)
             coiling = None
             if resumable:
-                coiling = HybridCoiling(config, comm, window=WindowSettings.from_config(config.model))
-                coiling.restore(restart["coiling"], tables)
+                coiling = HybridCoiling(
+                    config,
+                    comm,
+                    window=WindowSettings.from_config(config.model),
+                    restart=restart["coiling"],
+                    tables=tables,
+                )
             if meta.get("completed"):
                 LOG.info("hybrid coiling: completed in %s at %.6g rad", resume, model.root.angle)
                 phase = HybridCoilingPhase(config, comm, model, restart, coiling=coiling, completed=True)

@@ -94,9 +94,7 @@ def hybrid_coil_from(
             "hybrid first, or use the full shell (model.kind = 'shell')"
         )
     model, _ = read_checkpoint(stowed, config, comm)
-    coiling = HybridCoiling(config, comm)
-    coiling.restore(restart["coiling"], tables)
-    return model, coiling
+    return model, HybridCoiling(config, comm, restart=restart["coiling"], tables=tables)
 
 
 def run_hybrid_payout(
@@ -124,8 +122,7 @@ def run_hybrid_payout(
         if meta.get("phase") != "payout" or restart.get("model") != "hybrid" or tables is None:
             raise ValueError(f"{resume} holds no restart state of the hybrid's payout")
         model, _ = read_checkpoint(resume, config, comm)
-        coiling = HybridCoiling(config, comm)
-        coiling.restore(restart["coiling"], tables)
+        coiling = HybridCoiling(config, comm, restart=restart["coiling"], tables=tables)
         completed = bool(meta.get("completed"))
     elif model is None or coiling is None:
         raise ValueError("the hybrid's payout starts from its own coil: give the coiling and its full shell")
