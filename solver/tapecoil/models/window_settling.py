@@ -5,7 +5,8 @@ is not the shell's own equilibrium there. :func:`settle_placed` lets the section
 the old window's edge and the old shell's element beside it find it among their neighbours,
 where a motion in time would release that difference as a vibration; :func:`settle_at_rest`
 settles a whole window of a tape at rest (a release). Both are one static solve of
-:func:`settle`.
+:func:`settle`. :func:`settle_withdrawn` does the same for the beam's nodes that a move fitted
+to the old shell's sections.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from tapecoil.core.dofs import global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.models.nodes import Nodes
 
-__all__ = ["settle", "settle_at_rest", "settle_placed"]
+__all__ = ["settle", "settle_at_rest", "settle_placed", "settle_withdrawn"]
 
 # settle_placed frees the old window's edge and this many of the old shell's elements beside it:
 # the old edge was held to a rigid section by its tie, and its neighbours stood in equilibrium
@@ -118,4 +119,71 @@ def settle(hybrid, choose, config) -> dict:
         "moved": shell.comm.allreduce(moved, op=MPI.MAX),
         "iterations": int(result.iterations),
         "converged": bool(result.converged),
+    }
+
+
+def settle_withdrawn(hybrid, stretch: tuple[float, float], config) -> dict:
+    """Settle the beam's nodes strictly inside ``stretch`` (start, end) [m], fitted by a window
+    move to the old shell's sections (the shell turned into beam): one static solve of the beam's
+    energy for their dofs, every other dof held (the tie's node and the old beam's beyond), the
+    rotations then committed.
+
+    A fitted node takes the rigid motion of the shell's section there; its line is the section's
+    centroid. Where the section is not the beam's (in time its arc breathes, flattened a little
+    here and less there), the centroid's place across the tape varies along it and the fitted
+    line leans off the fitted frames: a transverse shear that the beam's large shear stiffness
+    holds with many times the shell's strain energy of that stretch (docs/hybrid.md, "Where the
+    energy goes at a move"). Returns the beam's strain energy [J] before and after, the largest
+    displacement [m] and the Newton iterations (collective); on a failed solve the fitted state
+    is kept and ``converged`` is False."""
+    beam = hybrid.beam
+    model = beam.model
+    comm = model.mesh.comm
+    start, end = stretch
+    tol = 1e-9 * (1.0 + abs(end))
+    x = model.node_points[:, 0]
+    free = (x > start + tol) & (x < end - tol)
+    strain = dolfinx.fem.form(model.energy)
+    before = global_scalar(strain, comm)
+    figures = {"strain_energy_fitted": before, "moved": 0.0, "iterations": 0, "converged": True}
+    if comm.allreduce(int(free.sum())) == 0:
+        return {**figures, "strain_energy_settled": before}
+    free_dofs = np.concatenate([model.node_u_dofs[free].ravel(), model.node_theta_dofs[free].ravel()])
+    held = np.setdiff1d(np.arange(len(model.q.x.array), dtype=np.int32), free_dofs).astype(np.int32)
+    fitted = dolfinx.fem.Function(model.W)
+    fitted.x.array[:] = model.q.x.array
+    F, J = beam.forms()
+    solver = SNESSolver.from_config(
+        F,
+        J,
+        model.q,
+        [*beam.bcs, dolfinx.fem.dirichletbc(fitted, held)],
+        config.solver,
+        prefix=f"{beam.name}_withdrawn_",
+        # the rotations' Hessian is not symmetric away from equilibrium; a line search as for
+        # the shell's placed sections
+        defaults={"pc_type": "lu", "snes_linesearch_type": "bt"},
+        state_scale=model.rounding_scale(),
+    )
+    solver.point_forces = beam.point_forces
+    result = solver.solve()
+    solver.destroy()
+    if not result.converged:
+        model.q.x.array[:] = fitted.x.array
+        model.q.x.scatter_forward()
+        return {
+            **figures,
+            "strain_energy_settled": before,
+            "iterations": int(result.iterations),
+            "converged": False,
+        }
+    change = model.q.x.array[model.node_u_dofs] - fitted.x.array[model.node_u_dofs]
+    moved = float(np.linalg.norm(change, axis=1).max(initial=0.0))
+    model.commit()
+    return {
+        "strain_energy_fitted": before,
+        "strain_energy_settled": global_scalar(strain, comm),
+        "moved": comm.allreduce(moved, op=MPI.MAX),
+        "iterations": int(result.iterations),
+        "converged": True,
     }

@@ -37,7 +37,8 @@ in coiling, where the lift-off travels the other way), and the state and the rat
 accelerations) are carried over by :func:`~tapecoil.models.window_motion.carry_motion`; shell becomes
 beam ahead of the ploy region, towards the free end, and beam becomes shell on the coil. The
 sections placed into shell from the flattened beam are then settled
-(:func:`~tapecoil.models.window_settling.settle_placed`).
+(:func:`~tapecoil.models.window_settling.settle_placed`), and so are the arc beam's nodes fitted
+to the shell's sections ahead (:func:`~tapecoil.models.window_settling.settle_withdrawn`).
 
 After every step the deployment reads its measures
 (:class:`~tapecoil.phases.hybrid_deployment_measures.HybridDeploymentMeasures`): the energies, the
@@ -75,7 +76,7 @@ from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.nodes import Nodes
 from tapecoil.models.window import carry_over
 from tapecoil.models.window_motion import carry_motion
-from tapecoil.models.window_settling import settle_at_rest, settle_placed
+from tapecoil.models.window_settling import settle_at_rest, settle_placed, settle_withdrawn
 from tapecoil.phases.free_hub import section_moment
 from tapecoil.phases.hybrid_deployment_measures import HybridDeploymentMeasures, coiled_along
 from tapecoil.phases.hybrid_free_hub import HybridFreeHub
@@ -233,7 +234,7 @@ class HybridDeployment:
             # and towards the free end settles whole, so that the release starts from rest and
             # the hold's dead forces are what holds the end there
             self.placed_settling.append(settle_at_rest(self.hybrid, cfg))
-            self._check_settled(self.placed_settling[-1])
+            self._check_settled(self.placed_settling[-1], "the window grown at release did not settle")
         self.hold = None
         self.rotor = self.free_hub = None
         self.motion = self._motion(self.hybrid, release=True)
@@ -387,8 +388,13 @@ class HybridDeployment:
         new = self.coiling.build(start, self._name(), released=True)
         new_rates = carry_motion(old, new, rates, probe)
         self.coiling.carry_winding(old, new, self.angle)
-        settling = settle_placed(new, old.shell.surface.xi_range[0], self.config)
-        self._check_settled(settling)
+        old_window = old.shell.surface.xi_range[0]
+        settling = settle_placed(new, old_window, self.config)
+        self._check_settled(settling, "the sections placed from the beam did not settle on the shell")
+        new_end = new.shell.surface.xi_range[0][1]
+        withdrawn = settle_withdrawn(new, (new_end, old_window[1]), self.config)
+        self._check_settled(withdrawn, "the beam's nodes fitted to the shell did not settle")
+        settling.update({f"withdrawn_{k}": v for k, v in withdrawn.items()})
         motion.destroy()
         self.hold = None  # moved after the release: the end is free
         self.hybrid = new
@@ -404,13 +410,14 @@ class HybridDeployment:
         )
         self.moves.append((self.time, *self.window()))
 
-    def _check_settled(self, settling: dict) -> None:
-        """Stop, the last converged state kept, where the sections a window move placed did not
-        settle: stepping on from their placement would release its strain as a vibration."""
+    def _check_settled(self, settling: dict, failure: str) -> None:
+        """Stop, the last converged state kept, where what a window move placed or fitted did not
+        settle (``failure`` says which): stepping on from it would release its strain as a
+        vibration."""
         if not settling["converged"]:
             raise ContinuationError(
-                f"the hybrid's window move at t = {self.time:.6g} s: the sections placed from "
-                f"the beam did not settle on the shell ({settling['iterations']} Newton "
+                f"the hybrid's window move at t = {self.time:.6g} s: {failure} "
+                f"({settling['iterations']} Newton "
                 "iterations); deploy this tape with the full shell (model.kind = 'shell'), or "
                 f"with a finer mesh. Last converged time {self.time:.6g} s",
                 self.time,
