@@ -409,7 +409,7 @@ def test_a_window_move_turns_shell_into_beam_without_the_fits_shear():
     their frames wherever the section's centroid wanders across the tape (the arc breathes in
     time); settled with their ends held, the stretch keeps the shell's configuration to 1e-5 m
     (measured 9.8e-6 m) and the fit's shear strain goes: the beam's strain energy falls from
-    5.2e-4 to 2.3e-5 J (settled below a fifth of fitted asked), and the strain energy rises across the move by
+    5.2e-4 to 2.3e-5 J (below a fifth asked), and the strain energy rises across the move by
     1.0e-3 of itself (2e-3 asked; 3.8e-3 with the fitted nodes kept: docs/hybrid.md, "Where
     the energy goes at a move")."""
     deployment = short_deployment(MPI.COMM_WORLD)

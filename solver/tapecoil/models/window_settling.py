@@ -89,28 +89,17 @@ def settle(hybrid, choose, config) -> dict:
             "converged": True,
         }
     free_dofs = np.concatenate([nodes.u_dofs[free].ravel(), nodes.theta_dofs[free].ravel()])
-    size = len(model.q.x.array)
-    held = np.setdiff1d(np.arange(size, dtype=np.int32), free_dofs).astype(np.int32)
-    placed = dolfinx.fem.Function(model.W)
-    placed.x.array[:] = model.q.x.array
-    hold = dolfinx.fem.dirichletbc(placed, held)
-    F, J = shell.forms()
-    solver = SNESSolver.from_config(
-        F,
-        J,
+    result, placed = _solve_for(
         model.q,
-        [*shell.bcs, hold],
-        config.solver,
+        free_dofs,
+        shell.forms(),
+        shell.bcs,
+        config,
         prefix=f"{shell.name}_placed_",
         # an energy's minimum from a strained placement: a full Newton step can overshoot it
         defaults={"pc_type": "cholesky", "snes_linesearch_type": "bt"},
         state_scale=model.rounding_scale(),
     )
-    result = solver.solve()
-    if not result.converged:
-        model.q.x.array[:] = placed.x.array
-    model.q.x.scatter_forward()
-    solver.destroy()
     change = model.q.x.array - placed.x.array
     moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
     return {
@@ -149,28 +138,20 @@ def settle_withdrawn(hybrid, stretch: tuple[float, float], config) -> dict:
     if comm.allreduce(int(free.sum())) == 0:
         return {**figures, "strain_energy_settled": before}
     free_dofs = np.concatenate([model.node_u_dofs[free].ravel(), model.node_theta_dofs[free].ravel()])
-    held = np.setdiff1d(np.arange(len(model.q.x.array), dtype=np.int32), free_dofs).astype(np.int32)
-    fitted = dolfinx.fem.Function(model.W)
-    fitted.x.array[:] = model.q.x.array
-    F, J = beam.forms()
-    solver = SNESSolver.from_config(
-        F,
-        J,
+    result, fitted = _solve_for(
         model.q,
-        [*beam.bcs, dolfinx.fem.dirichletbc(fitted, held)],
-        config.solver,
+        free_dofs,
+        beam.forms(),
+        beam.bcs,
+        config,
         prefix=f"{beam.name}_withdrawn_",
         # the rotations' Hessian is not symmetric away from equilibrium; a line search as for
         # the shell's placed sections
         defaults={"pc_type": "lu", "snes_linesearch_type": "bt"},
         state_scale=model.rounding_scale(),
+        point_forces=beam.point_forces,
     )
-    solver.point_forces = beam.point_forces
-    result = solver.solve()
-    solver.destroy()
     if not result.converged:
-        model.q.x.array[:] = fitted.x.array
-        model.q.x.scatter_forward()
         return {
             **figures,
             "strain_energy_settled": before,
@@ -187,3 +168,29 @@ def settle_withdrawn(hybrid, stretch: tuple[float, float], config) -> dict:
         "iterations": int(result.iterations),
         "converged": True,
     }
+
+
+def _solve_for(q, free_dofs, forms, bcs, config, *, prefix, defaults, state_scale, point_forces=()):
+    """One static solve of ``forms`` (residual, Jacobian) for the dofs ``free_dofs`` of ``q``,
+    every other dof held where it is (and ``bcs``), with ``config.solver``'s settings under
+    ``prefix``; on a failed solve ``q`` is put back. Returns the solve's result and a Function
+    holding the state it started from."""
+    start = dolfinx.fem.Function(q.function_space)
+    start.x.array[:] = q.x.array
+    held = np.setdiff1d(np.arange(len(q.x.array), dtype=np.int32), free_dofs).astype(np.int32)
+    solver = SNESSolver.from_config(
+        *forms,
+        q,
+        [*bcs, dolfinx.fem.dirichletbc(start, held)],
+        config.solver,
+        prefix=prefix,
+        defaults=defaults,
+        state_scale=state_scale,
+    )
+    solver.point_forces = list(point_forces)
+    result = solver.solve()
+    solver.destroy()
+    if not result.converged:
+        q.x.array[:] = start.x.array
+    q.x.scatter_forward()
+    return result, start
