@@ -68,7 +68,6 @@ class StretchEnergy:
         return sum(global_scalar(form, comm) for form in self.forms)
 
 
-deployment = None
 moves = []
 
 
@@ -116,10 +115,8 @@ def components(hybrid, parts):
     the two bendings [J]."""
     beam = hybrid.beam.model
     ((a, b),) = parts["withdrawn"]
-    s = ufl.SpatialCoordinate(beam.mesh)[0]
-    inside = ufl.conditional(ufl.And(ufl.ge(s, a), ufl.lt(s, b)), 1.0, 0.0)
-    c = beam.section_fields
-    bend = beam.curvature - beam.curvature_0 - beam.natural_share * ufl.as_vector([c[6], c[7], c[8]])
+    inside = StretchEnergy._inside(ufl.SpatialCoordinate(beam.mesh)[0], (a, b))
+    c, bend = beam.section_fields, beam.bending_strain
     terms = [0.5 * c[i] * beam.strain[i] ** 2 for i in range(3)]
     terms += [0.5 * c[3 + i] * bend[i] ** 2 for i in range(3)]
     return [global_scalar(dolfinx.fem.form(inside * t * beam.dx), comm) for t in terms]

@@ -210,7 +210,8 @@ class GeometricallyExactBeam:
         # the natural curvatures' share (1 but while a section is being flattened, see the hybrid)
         self.natural_share = dolfinx.fem.Constant(mesh, 1.0)
         natural = self.natural_share * ufl.as_vector([c[6], c[7], c[8]])
-        bend = self.curvature - self.curvature_0 - natural
+        # the bending strains (twist, then about the section's axes 2 and 3) that C_M holds
+        self.bending_strain = bend = self.curvature - self.curvature_0 - natural
         # the flattened coil's free edges (BeamSection.edge_relief): kappa held above the floor
         # by a smooth maximum, so that the law stays bounded where it does not hold
         kappa = c[13] * (self.curvature[1] - self.curvature_0[1])
