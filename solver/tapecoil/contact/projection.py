@@ -51,40 +51,16 @@ def closest_points(
     ``y`` (n, 3), the shape functions ``N`` (n, 9) there, the unit ``normal`` (n, 3) of the
     cell's orientation (dy/dr_1 x dy/dr_2), the ``distance`` (n,) and the unit ``direction``
     (n, 3) from y to the point. ``start``: reference coordinates to start from (a previous
-    projection), else the cell centres.
+    projection), else the cell centres. Computed by the compiled kernel
+    (:func:`tapecoil.contact.kernels.closest_points`, which takes the points and cells by index).
     """
+    from tapecoil.contact import kernels
+
     n = points.shape[0]
-    ref = np.full((n, 2), 0.5) if start is None else start.copy()
-    identity = np.eye(2)[None]
-    for _ in range(iterations):
-        N, dN = q2_basis(ref)
-        y = np.matmul(N[:, None, :], cells_xyz)[:, 0]
-        t = np.matmul(dN.transpose(0, 2, 1), cells_xyz)  # (n, 2, 3): tangents
-        rhs = np.matmul(t, (points - y)[:, :, None])[..., 0]  # minus the gradient of |x - y|^2 / 2
-        held = ((ref <= 0.0) & (rhs < 0.0)) | ((ref >= 1.0) & (rhs > 0.0))
-        G = np.matmul(t, t.transpose(0, 2, 1))
-        G = np.where(held[:, :, None] | held[:, None, :], identity, G)
-        step = np.linalg.solve(G, np.where(held, 0.0, rhs)[:, :, None])[..., 0]
-        ref = np.clip(ref + step, 0.0, 1.0)
-    N, dN = q2_basis(ref)
-    y = np.matmul(N[:, None, :], cells_xyz)[:, 0]
-    t = np.matmul(dN.transpose(0, 2, 1), cells_xyz)
-    r = points - y
-    rhs = np.einsum("nji,ni->nj", t, r)
-    held = ((ref <= 0.0) & (rhs < 0.0)) | ((ref >= 1.0) & (rhs > 0.0))
-    normal = np.cross(t[:, 0], t[:, 1])
-    normal /= np.linalg.norm(normal, axis=1)[:, None]
-    distance = np.linalg.norm(r, axis=1)
-    direction = r / np.maximum(distance, 1e-300)[:, None]
-    return {
-        "ref": ref,
-        "held": held,
-        "y": y,
-        "N": N,
-        "normal": normal,
-        "distance": distance,
-        "direction": direction,
-    }
+    x = np.concatenate([np.asarray(points, dtype=float).reshape(n, 3), np.asarray(cells_xyz).reshape(-1, 3)])
+    cells = n + np.arange(9 * n, dtype=np.int64).reshape(n, 9)
+    index = np.arange(n, dtype=np.int64)
+    return kernels.closest_points(index, index, x, cells, start=start, iterations=iterations)
 
 
 def box_distance(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:

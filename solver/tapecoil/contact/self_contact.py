@@ -47,13 +47,13 @@ from dataclasses import dataclass
 
 import dolfinx
 import numpy as np
-import scipy.sparse
 import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from tapecoil.contact.linearisation import NodalNormals, gap_derivatives
-from tapecoil.contact.projection import CandidateSearch, closest_points
+from tapecoil.contact import kernels
+from tapecoil.contact.linearisation import NodalNormals
+from tapecoil.contact.projection import CandidateSearch
 
 
 def smoothed_bracket(gap: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -71,27 +71,35 @@ def smoothed_bracket(gap: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndar
 class ContactPairs:
     """The contact pairs of one rank at one state: contact node, partner cell and the penalty.
 
-    ``dofs`` (P, 30): global u-dofs of the node and of the partner cell's nodes; ``B`` (P, 30):
-    the force's direction on them (the force is ``force`` B, ``force`` (P,) = dE/dg);
-    ``matrix`` (P, 30, 30): the force's derivative on them at fixed nodal normals;
-    ``N`` (P, 9) the shape functions at the closest points;
-    ``normal_sensitivity`` (P, 30, 3): the force's derivative with respect to m = N_b n_b;
-    ``normal_data``: the state's nodal normals for :meth:`SelfContact.normal_derivatives`; ``energy``:
-    this rank's penalty energy [J].
+    ``node`` (P,), ``cell`` (P,): the contact node and its partner cell; ``ref`` (P, 2),
+    ``held`` (P, 2), ``N`` (P, 9): the closest point's reference coordinates, which of them are
+    held on an edge, and the shape functions there; ``side`` (P,) and ``gap`` (P,);
+    ``direction`` (P, 3) the unit normal the gap is counted along; ``dofs`` (P, 30): global
+    u-dofs of the node and of the partner cell's nodes; ``B`` (P, 30): the force's direction on
+    them (the force is ``force`` B, ``force`` (P,) = dE/dg, ``stiffness`` (P,) = d2E/dg2);
+    ``positions`` (N, 3) and ``nodal`` (N, 3): the surface's nodes and their unit normals at
+    this state, ``normal_data`` what the normals' derivatives need; ``energy``: this rank's
+    penalty energy [J]. The force's derivative is computed when a Jacobian asks for it
+    (:meth:`SelfContact.jacobian_blocks`).
     """
 
     node: np.ndarray
     cell: np.ndarray
+    ref: np.ndarray
+    held: np.ndarray
+    N: np.ndarray
+    side: np.ndarray
     gap: np.ndarray
     direction: np.ndarray
     dofs: np.ndarray
     B: np.ndarray
     force: np.ndarray
-    matrix: np.ndarray
-    N: np.ndarray
-    normal_sensitivity: np.ndarray
+    stiffness: np.ndarray
+    positions: np.ndarray
+    nodal: np.ndarray
     normal_data: dict
     energy: float
+    blocks: tuple | None = None
 
 
 def inside_cell(ref: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
@@ -194,7 +202,7 @@ class SelfContact:
         self.u_dofs, self.weights, self.cells = surface.u_dofs, surface.weights, surface.cells
         self.buffer, self.exclusion, self.side_hint = buffer, exclusion, side_hint
         self.reach = thickness + self.cutoff
-        self.normal_field = NodalNormals(self.cells)
+        self.normal_field = NodalNormals(self.cells, self.n_nodes)
         self.timings = {
             "gather": 0.0,
             "search": 0.0,
@@ -233,13 +241,11 @@ class SelfContact:
         """
         stamp = (search.searches, self._reference_version)
         if search.data.get("stamp") != stamp:
-            xr = self.reference_positions
-            converged = closest_points(xr[node], xr[self.cells[cell]])
+            converged = kernels.closest_points(node, cell, self.reference_positions, self.cells)
             if self.side_hint is not None:
                 above = self.side_hint(node, cell) > 0
             else:
-                xs = search.positions_at_search
-                now = closest_points(xs[node], xs[self.cells[cell]])
+                now = kernels.closest_points(node, cell, search.positions_at_search, self.cells)
                 above = np.where(
                     inside_cell(converged["ref"]),
                     np.einsum("pi,pi->p", converged["direction"], converged["normal"]) >= 0.0,
@@ -269,9 +275,12 @@ class SelfContact:
         node, cell = search.candidates(x, self.owned)
         t1 = time.perf_counter()
         data = self._sides(node, cell, search)
+        nodal, normal_data = self.normal_field.normals(x)
         # from the converged state's projections (fixed between searches), so that the residual
         # is a function of the state alone
-        found = closest_points(x[node], x[self.cells[cell]], iterations=6, start=data["start"])
+        found = kernels.closest_points(
+            node, cell, x, self.cells, start=data["start"], iterations=6, nodal=nodal
+        )
         side = data["side"]
         # the gap is counted along the partner's smoothed normal (the Q2 surface is only C0:
         # across an edge between two cells the cells' own normals jump, and a node over that
@@ -285,66 +294,77 @@ class SelfContact:
         # own neighbourhood. Counted along the normal alone, a node beside a cell of its own
         # section (just beyond the exclusion, in the plane of a flattened section) would be
         # taken for a node that has sunk a whole thickness into it
-        r = x[node] - found["y"]
-        nodal, normal_data = self.normal_field.normals(x)
-        smooth = np.matmul(found["N"][:, None, :], nodal[self.cells[cell]])[:, 0]
-        smooth /= np.linalg.norm(smooth, axis=1)[:, None]
-        normal_distance = np.einsum("pi,pi->p", r, smooth)
-        beside = np.linalg.norm(r - normal_distance[:, None] * smooth, axis=1)
-        over = inside_cell(found["ref"]) | (beside <= self.h)
-        gap = side * normal_distance - self.h
-        keep = over & (gap < self.cutoff)
-        node, cell, gap, side = node[keep], cell[keep], gap[keep], side[keep]
-        ref, held, distance = found["ref"][keep], found["held"][keep], found["distance"][keep]
-        first = nearest_on_each_side(node, cell, side, distance, inside_cell(ref), memory)
-        node, cell, gap, side, ref, held = (v[first] for v in (node, cell, gap, side, ref, held))
-        N = found["N"][keep][first]
+        over = inside_cell(found["ref"]) | (found["beside"] <= self.h)
+        gap = side * found["along"] - self.h
+        keep = np.flatnonzero(over & (gap < self.cutoff))
+        first = keep[
+            nearest_on_each_side(
+                node[keep],
+                cell[keep],
+                side[keep],
+                found["distance"][keep],
+                inside_cell(found["ref"][keep]),
+                memory,
+            )
+        ]
+        node, cell, gap, side = node[first], cell[first], gap[first], side[first]
+        ref, held, N = found["ref"][first], found["held"][first], found["N"][first]
         t2 = time.perf_counter()
         self.timings["search"] += t1 - t0
         self.timings["projection"] += t2 - t1
 
-        partner = self.cells[cell]
-        d = gap_derivatives(x[node], x[partner], nodal[partner], ref, held, side)
+        B = kernels.pair_blocks(node, cell, x, self.cells, nodal, ref, held, side)
         u_dofs = self.u_dofs if dofs is None else dofs
+        partner = self.cells[cell]
         pair_dofs = np.concatenate([u_dofs[node], u_dofs[partner].reshape(-1, 27)], axis=1)
         p, dp, d2p = smoothed_bracket(gap, self.delta)
         kw = self.penalty * self.weights[node]
-        force, stiffness = kw * p * dp, kw * (dp**2 + p * d2p)
-        # the force f B differentiated at fixed nodal normals, and with respect to m = N_b n_b
-        matrix = stiffness[:, None, None] * d["B"][:, :, None] * d["dg"][:, None, :]
-        matrix += force[:, None, None] * d["dB"]
-        sensitivity = stiffness[:, None, None] * d["B"][:, :, None] * d["dg_dm"][:, None, :]
-        sensitivity += force[:, None, None] * d["dB_dm"]
         return ContactPairs(
             node=node,
             cell=cell,
-            gap=gap,
-            direction=side[:, None] * smooth[keep][first],
-            dofs=pair_dofs,
-            B=d["B"],
-            force=force,
-            matrix=matrix,
+            ref=ref,
+            held=held,
             N=N,
-            normal_sensitivity=sensitivity,
+            side=side,
+            gap=gap,
+            direction=side[:, None] * found["smooth"][first],
+            dofs=pair_dofs,
+            B=B,
+            force=kw * p * dp,
+            stiffness=kw * (dp**2 + p * d2p),
+            positions=x,
+            nodal=nodal,
             normal_data=normal_data,
             energy=float(np.sum(0.5 * kw * p**2)),
         )
 
+    def jacobian_blocks(self, pairs: ContactPairs) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs' force differentiated at fixed nodal normals, (P, 30, 30), and with respect
+        to m = N_b n_b at each closest point, (P, 30, 3) (computed once per pairs)."""
+        if pairs.blocks is None:
+            t0 = time.perf_counter()
+            _, matrix, sensitivity = kernels.pair_blocks(
+                pairs.node,
+                pairs.cell,
+                pairs.positions,
+                self.cells,
+                pairs.nodal,
+                pairs.ref,
+                pairs.held,
+                pairs.side,
+                pairs.force,
+                pairs.stiffness,
+                matrices=True,
+            )
+            pairs.blocks = (matrix, sensitivity)
+            self.timings["assembly"] += time.perf_counter() - t0
+        return pairs.blocks
+
     def normal_derivatives(self, pairs: ContactPairs) -> np.ndarray:
-        """dm/dX (P, K, 3, 3) of m = N_b n_b at each pair's closest point, with respect to the
-        nodes of its partner cell's patch (:class:`~tapecoil.contact.linearisation.NodalNormals`:
-        K nodes, -1 padded)."""
-        P = len(pairs.node)
-        if P == 0:  # no pairs on this rank (early in coiling): nothing to differentiate
-            return np.zeros((0, self.normal_field.patch.shape[1], 3, 3))
+        """dn_k/dX_j (slots, 3, 3) of the nodal normals at ``pairs``' state, over each node's
+        neighbourhood (:class:`~tapecoil.contact.linearisation.NodalNormals`)."""
         t0 = time.perf_counter()
-        R = self.normal_field.derivatives(pairs.normal_data)  # (Nc, 9, K, 3, 3)
-        n_cells = R.shape[0]
-        weights = scipy.sparse.csr_matrix(
-            (pairs.N.ravel(), (np.repeat(np.arange(P), 9), (pairs.cell[:, None] * 9 + np.arange(9)).ravel())),
-            shape=(P, n_cells * 9),
-        )
-        out = (weights @ R.reshape(n_cells * 9, -1)).reshape(P, *R.shape[2:])
+        out = self.normal_field.derivatives(pairs.normal_data)
         self.timings["normal_derivatives"] += time.perf_counter() - t0
         return out
 

@@ -13,6 +13,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from tapecoil.contact import kernels
 from tapecoil.contact.projection import CandidateSearch
 from tapecoil.contact.self_contact import ContactPairs, SelfContact
 from tapecoil.core.dofs import owned_constrained_dofs
@@ -61,6 +62,25 @@ SOLVER_OPTIONS = {
     "ksp_rtol": 1e-8,
     "ksp_max_it": 100,
 }
+
+
+def add_blocks(A: PETSc.Mat, dofs: np.ndarray, blocks: np.ndarray) -> None:
+    """Add square blocks (P, n, n) on the global rows and columns ``dofs`` (P, n) to ``A``, all
+    in one call (rows owned by other ranks go through PETSc's stash; negative indices, the
+    constrained dofs, are left out as MatSetValues leaves them)."""
+    P, n = dofs.shape
+    if P == 0:
+        return
+    rows = np.ascontiguousarray(dofs, dtype=PETSc.IntType).ravel()
+    columns = np.repeat(dofs[:, None, :], n, axis=1).astype(PETSc.IntType).ravel()
+    starts = np.arange(0, P * n * n + 1, n, dtype=PETSc.IntType)
+    A.setValuesIJV(
+        starts,
+        columns,
+        np.ascontiguousarray(blocks, dtype=float).ravel(),
+        addv=PETSc.InsertMode.ADD,
+        rowmap=rows,
+    )
 
 
 class SelfContactTerm:
@@ -145,10 +165,12 @@ class SelfContactTerm:
         """Add the contact matrix to ``A`` (collective); True if A's pattern had to be widened.
 
         A takes each pair's force differentiated on its own 30 dofs; its derivative through the
-        nodal normals, on the dofs of the partner cell's patch, is kept for :meth:`apply_coupling`.
+        nodal normals, on the dofs of the nodes around the partner cell, is kept for
+        :meth:`apply_coupling`.
         """
         pairs = self.current()
-        self._coupling = (pairs, self.contact.normal_derivatives(pairs))
+        matrix, sensitivity = self.contact.jacobian_blocks(pairs)
+        self._coupling = (pairs, sensitivity, self.contact.normal_derivatives(pairs))
         t0 = time.perf_counter()
         keys = pairs.node * len(self.contact.cells) + pairs.cell
         listed = keys.tolist()
@@ -159,10 +181,7 @@ class SelfContactTerm:
         if widen:
             self._widen(A, pairs.dofs[new])
             self._pattern.update(keys[new].tolist())
-        blocks = self.weight * pairs.matrix
-        add = PETSc.InsertMode.ADD
-        for dofs, block in zip(pairs.dofs, blocks, strict=True):
-            A.setValues(dofs, dofs, block, addv=add)
+        add_blocks(A, pairs.dofs, self.weight * matrix)
         self.contact.timings["assembly"] += time.perf_counter() - t0
         return widen
 
@@ -170,26 +189,29 @@ class SelfContactTerm:
         """y += K x (or K^T x), K the part of the Jacobian at the last :meth:`add_jacobian` that
         goes through the nodal normals (collective). Constrained dofs take no part."""
         t0 = time.perf_counter()
-        pairs, dm = self._coupling
-        values = self.contact.surface.gather_u(x.getArray(readonly=True))
+        pairs, sensitivity, D = self._coupling
+        contact = self.contact
+        values = contact.surface.gather_u(x.getArray(readonly=True))
         values[self.dofs < 0] = 0.0
-        patch = self.contact.normal_field.patch[pairs.cell]
+        neighbourhood = contact.normal_field.neighbourhood
         if not transpose:
-            v = np.where(patch[:, :, None] >= 0, values[patch], 0.0)
-            change = np.einsum("pkjl,pkl->pj", dm, v)  # of m = N_b n_b
-            out = (self.weight * np.einsum("paj,pj->pa", pairs.normal_sensitivity, change)).ravel()
+            out = kernels.apply_normals(
+                pairs.cell, contact.cells, pairs.N, sensitivity, neighbourhood, D, values, False
+            )
             rows = pairs.dofs.ravel()
         else:
-            cells = self.contact.cells[pairs.cell]
+            cells = contact.cells[pairs.cell]
             on_rows = np.concatenate([values[pairs.node], values[cells].reshape(-1, 27)], axis=1)
-            change = self.weight * np.einsum("paj,pa->pj", pairs.normal_sensitivity, on_rows)
-            out = np.einsum("pkjl,pj->pkl", dm, change).ravel()
-            rows = np.where(patch[:, :, None] >= 0, self.dofs[patch], -1).ravel()
-        free = rows >= 0
+            out = kernels.apply_normals(
+                pairs.cell, contact.cells, pairs.N, sensitivity, neighbourhood, D, on_rows, True
+            )
+            rows = self.dofs.ravel()
+        out = self.weight * out.ravel()
+        free = (rows >= 0) & (out != 0.0)
         y.setValues(rows[free], out[free], addv=PETSc.InsertMode.ADD)
         y.assemblyBegin()
         y.assemblyEnd()
-        self.contact.timings["coupling"] += time.perf_counter() - t0
+        contact.timings["coupling"] += time.perf_counter() - t0
 
     def _widen(self, A: PETSc.Mat, dofs: np.ndarray) -> None:
         """Add the couplings of the pairs ``dofs`` (P, 30) to A's nonzero pattern (collective).
@@ -226,9 +248,7 @@ class SelfContactTerm:
         C.setType(PETSc.Mat.Type.AIJ)
         C.setPreallocationNNZ((d_nnz, o_nnz))
         C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-        zeros = np.zeros((width, width))
-        for pair in dofs:
-            C.setValues(pair, pair, zeros, addv=PETSc.InsertMode.ADD)
+        add_blocks(C, dofs, np.zeros((len(dofs), width, width)))
         C.assemble()
         lgmaps = A.getLGMap()
         A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
