@@ -184,3 +184,34 @@ def test_annulus():
     pts = np.array([[0.3, 5.0], [6.5, 9.0]])
     fd = (geom.phi0(pts + np.array([[eps], [0.0]])) - geom.phi0(pts - np.array([[eps], [0.0]]))) / (2 * eps)
     assert np.allclose(geom.jacobian(pts)[:, 0], fd, atol=1e-6)
+
+
+def test_across_and_along_count_the_elements_on_the_edges_they_name():
+    """``across`` elements along xi_2 (a tape's width), ``along`` along xi_1 (its length): on a
+    rectangle 1 x 2 of parameters meshed 3 x 5, the nodes' distinct xi_2 are 4 and xi_1 are 6."""
+    from tapecoil.geometry.surfaces import MappedSurface
+
+    flat = MappedSurface(lambda xi, ops: (xi[0], xi[1], 0 * xi[0]), ((0.0, 1.0), (0.0, 2.0)))
+    strip = create_strip_mesh(MPI.COMM_WORLD, flat, MeshResolution(across=3, along=5))
+    x = np.concatenate(MPI.COMM_WORLD.allgather(strip.mesh.geometry.x[:, :2]))
+    # Q1 geometry: the mesh's nodes are the elements' corners
+    assert len(np.unique(np.round(x[:, 0], 12))) == 5 + 1
+    assert len(np.unique(np.round(x[:, 1], 12))) == 3 + 1
+
+
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        ((0, 10), r"across = 0 must be a positive integer \(elements along xi_2, across a tape's width\)"),
+        ((4, -2), r"along = -2 must be a positive integer \(elements along xi_1"),
+        ((4.0, 10), "across = 4.0 must be a positive integer"),
+        ((True, 10), "across = True must be a positive integer"),
+        ((4, "10"), "along = '10' must be a positive integer"),
+        ((4, 10, 0.0), "grading = 0.0 must be a positive number"),
+        ((4, 10, math.inf), "grading = inf must be a positive number"),
+    ],
+)
+def test_a_resolution_that_is_no_element_count_is_refused(arguments, message):
+    with pytest.raises(ValueError, match=message):
+        MeshResolution(*arguments)
+    assert MeshResolution(np.int64(4), 10, 2).across == 4  # numpy integers are counts too

@@ -21,6 +21,8 @@ are one and the same surface.
 
 from __future__ import annotations
 
+import math
+import numbers
 import sys
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -77,11 +79,35 @@ PRESETS = load_presets()
 
 @dataclass(frozen=True)
 class MeshResolution:
-    """Number of elements across the width and along the length, and the length grading."""
+    """The structured mesh of a parameter rectangle: how many elements in each direction.
+
+    ``across``: elements along the second parameter xi_2, i.e. on each of the edges xi1_min and
+    xi1_max; on a tape, across its width (from side to side). ``along``: elements along the
+    first parameter xi_1, i.e. on each of the edges xi2_min and xi2_max; on a tape, along its
+    length (from the root to the free end). ``grading``: the last element along xi_1 over the
+    first (1: all the same length; above 1 they grow towards xi1_max, the free end). A general
+    surface is meshed the same way: e.g. on the slit annulus (xi_1 the polar angle, xi_2 the
+    radius) ``along`` elements go round it and ``across`` elements span the radius.
+    """
 
     across: int
     along: int
     grading: float = 1.0
+
+    def __post_init__(self):
+        for name, what in (
+            ("across", "elements along xi_2, across a tape's width"),
+            ("along", "elements along xi_1, along a tape's length"),
+        ):
+            value = getattr(self, name)
+            if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < 1:
+                raise ValueError(f"MeshResolution: {name} = {value!r} must be a positive integer ({what})")
+        grading = self.grading
+        if isinstance(grading, bool) or not isinstance(grading, numbers.Real) or not 0 < grading < math.inf:
+            raise ValueError(
+                f"MeshResolution: grading = {grading!r} must be a positive number (the last element "
+                "along xi_1 over the first)"
+            )
 
     @classmethod
     def from_config(cls, mesh: MeshConfig, length: float) -> MeshResolution:
