@@ -215,3 +215,46 @@ def test_a_resolution_that_is_no_element_count_is_refused(arguments, message):
     with pytest.raises(ValueError, match=message):
         MeshResolution(*arguments)
     assert MeshResolution(np.int64(4), 10, 2).across == 4  # numpy integers are counts too
+
+
+def _physical_groups(path) -> dict[str, np.ndarray]:
+    """Each physical group's name -> the coordinates (n, 3) of its nodes, read by gmsh itself."""
+    import gmsh
+
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        groups = {}
+        for dim, tag in gmsh.model.getPhysicalGroups():
+            _, coords = gmsh.model.mesh.getNodesForPhysicalGroup(dim, tag)
+            groups[gmsh.model.getPhysicalName(dim, tag)] = coords.reshape(-1, 3)
+    finally:
+        gmsh.finalize()
+    return groups
+
+
+@pytest.mark.parametrize(
+    "surface, names",
+    [
+        # a tape's strip keeps the names of the tape's edges (ROOT ... SIDE_POS)
+        (StripGeometry(0.0151, 0.0356, 0.5), ("strip", "root", "free_end", "side_neg", "side_pos")),
+        # any other surface names them by the parameter bound each lies on (XI1_MIN ... XI2_MAX)
+        (AnnulusGeometry(6.0, 10.0), ("surface", "xi1_min", "xi1_max", "xi2_min", "xi2_max")),
+    ],
+)
+def test_the_mesh_files_name_the_edges_by_what_they_are(tmp_path, surface, names):
+    """The physical groups of gmsh's model: each edge's name is on the parameter bound it says
+    (the nodes in parameter coordinates: xi_1 first, xi_2 second)."""
+    comm = MPI.COMM_WORLD
+    path = Path(comm.bcast(str(tmp_path), root=0)) / "surface.msh"  # rank 0 writes it
+    create_strip_mesh(comm, surface, MeshResolution(3, 8), msh=path)
+    if comm.rank != 0:
+        return
+    groups = _physical_groups(path)
+    assert set(groups) == set(names)
+    (a0, a1), (b0, b1) = surface.xi_range
+    whole, lo1, hi1, lo2, hi2 = names
+    assert len(groups[whole]) == 4 * 9
+    for name, coordinate, bound in ((lo1, 0, a0), (hi1, 0, a1), (lo2, 1, b0), (hi2, 1, b1)):
+        assert np.allclose(groups[name][:, coordinate], bound, atol=1e-12), name

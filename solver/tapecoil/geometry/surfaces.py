@@ -46,8 +46,9 @@ class Surface:
     functions of ``ops`` (sin, cos, sqrt, exp, log); the numpy map, the UFL map of the shell's
     forms and the Jacobian (the complex-step derivative of the numpy map, exact to round-off)
     all follow from it, so they cannot disagree. Edge tags (:mod:`tapecoil.geometry.meshes`):
-    XI1_MIN, XI1_MAX, XI2_MIN and XI2_MAX, the parameter bound each edge lies on (a tape's
-    root, free end and sides).
+    XI1_MIN, XI1_MAX, XI2_MIN and XI2_MAX, the parameter bound each edge lies on, named so in
+    the mesh's physical groups ("xi1_min" ...); a tape's strip names them by what they are on
+    the tape ("root", "free_end", "side_neg", "side_pos").
     """
 
     xi_range: tuple[tuple[float, float], tuple[float, float]]
@@ -184,8 +185,8 @@ class StripGeometry(Surface):
 class AnnulusGeometry(Surface):
     """A flat annulus R_inner <= r <= R_outer in the x-y plane, slit along the +x axis.
 
-    Parameters: xi_1 = polar angle (0 to 2 pi, the slit's two edges are ROOT and FREE_END),
-    xi_2 = radius (SIDE_NEG inner, SIDE_POS outer edge).
+    Parameters: xi_1 = polar angle (0 to 2 pi, the slit's two edges are "xi1_min" and "xi1_max"),
+    xi_2 = radius ("xi2_min" the inner, "xi2_max" the outer edge).
     """
 
     R_inner: float

@@ -28,13 +28,14 @@ from tapecoil.config import SolverConfig
 from tapecoil.core.dofs import global_scalar, node_value, owned_node_dofs
 from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
-from tapecoil.geometry.meshes import XI1_MAX, XI1_MIN, XI2_MAX, XI2_MIN, MeshResolution, create_strip_mesh
+from tapecoil.geometry.meshes import EDGE_NAMES, MeshResolution, create_strip_mesh
 from tapecoil.geometry.surfaces import Surface
 from tapecoil.models.edges import EdgeMotion, clamp
 from tapecoil.models.shell import NaghdiShell, ShellMaterial
 from tapecoil.models.supports import fixed_point, symmetry_plane
 
-EDGES = {"xi1_min": XI1_MIN, "xi1_max": XI1_MAX, "xi2_min": XI2_MIN, "xi2_max": XI2_MAX}
+# the edges by name (the names of the mesh's physical groups for a general surface)
+EDGES = {name: tag for tag, name in EDGE_NAMES.items()}
 
 
 class ShellProblem:
