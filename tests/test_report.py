@@ -71,6 +71,61 @@ def test_animation_has_a_frame_per_snapshot(run_dir):
     assert len(snapshots) > 5 and len(snapshots) - 2 <= gif.n_frames <= len(snapshots)
 
 
+def _phases(run_dir):
+    """(snapshot files, cells file, phase) of each phase's snapshots, the run's config and axis."""
+    from tapecoil.config import load_config
+    from tapecoil.hub.frame import HubFrame
+
+    config = load_config(run_dir / "config.toml")
+    axis = HubFrame(config.hub.radius, config.tape.h, config.coiling.sense).axis_point
+    folder = run_dir / "snapshots"
+    sequences = [
+        (sorted(folder.glob(f"{phase}_[0-9]*.npz")), folder / f"{phase}_cells.npz", phase)
+        for phase in ("coiling", "deployment")
+    ]
+    return sequences, config, axis
+
+
+def test_a_phase_keeps_one_camera_for_all_its_frames(run_dir, tmp_path):
+    """The animation's and the sequence's frames of a phase are all seen by the same camera, so
+    that the hub stays in its place and the scale holds while the tape moves; and the camera
+    frames the whole motion (it looks at the middle of the box holding every frame)."""
+    from tapecoil.post.render import animate_snapshots, phase_views, render_snapshots, snapshot_grid
+
+    sequences, config, axis = _phases(run_dir)
+    cameras = []
+    animate_snapshots(sequences, tmp_path / "animation.gif", config, axis, cameras=cameras)
+    for files, cells, phase in sequences:
+        seen = [used for label, used in cameras if label == phase]
+        assert len(seen) == len(files) > 2, phase
+        assert all(used == seen[0] for used in seen), phase
+        bounds = np.array([snapshot_grid(cells, f, config.tape.R).bounds for f in files])
+        (x0, x1), (z0, z1) = (
+            (bounds[:, 0].min(), bounds[:, 1].max()),
+            (bounds[:, 4].min(), bounds[:, 5].max()),
+        )
+        _, focal, _, _ = seen[0][0]
+        assert x0 < focal[0] < x1 and focal[0] == pytest.approx((x0 + x1) / 2, abs=0.1 * (x1 - x0)), phase
+        assert z0 - (x1 - x0) < focal[2] < z1, phase
+        # a zoom on the hub region, as a long tape gets: one camera for it too, on the hub's axis
+        views = phase_views(list(bounds), axis, config.hub.radius, config.tape.b, zoom=True)
+        panels = []
+        render_snapshots(
+            files[:3],
+            cells,
+            tmp_path / "zoomed.png",
+            config,
+            axis,
+            ["a", "b", "c"],
+            views=views,
+            cameras=panels,
+        )
+        whole, hub = panels[0::2], panels[1::2]
+        assert len(whole) == len(hub) == 3
+        assert all(c == whole[0] for c in whole) and all(c == hub[0] for c in hub), phase
+        assert hub[0][1][0] == pytest.approx(axis[0]) and hub[0] != whole[0], phase
+
+
 def test_report_ties_numbers_and_pictures_together(run_dir):
     html = (run_dir / "report.html").read_text()
     for name in EXPECTED:
