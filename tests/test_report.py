@@ -39,7 +39,14 @@ def _colourful(path) -> float:
     return float(((rgb.max(axis=2) - rgb.min(axis=2)) > 60).mean())
 
 
-EXPECTED = (
+def _tape_pixels(rgb: np.ndarray) -> np.ndarray:
+    """Where a render shows the colour map's saturated colours (viridis, shaded): the tape, not
+    the tan hub (a pale colour), the white ground or the black text and frames."""
+    top, bottom = rgb.max(axis=2), rgb.min(axis=2)
+    return (top > 25) & (top - bottom > 0.5 * top)
+
+
+FIGURES = (
     "coiling_energies",
     "coiling_forces",
     "coil_radius",
@@ -48,18 +55,41 @@ EXPECTED = (
     "deployment_energies",
     "deployment_root_loads",
     "deployment_hub",
-    "coiling_sequence",
-    "stowed",
-    "deployment_sequence",
 )
+RENDERS = ("coiling_sequence", "stowed", "deployment_sequence")
+EXPECTED = FIGURES + RENDERS
 
 
 def test_every_picture_is_drawn(run_dir):
-    for name in EXPECTED:
+    """Every figure has its data drawn, and every panel of every render shows the tape.
+
+    A figure's lines colour several times more of it than its legend's samples alone do (a
+    legend of three entries on each of two axes, with no data, colours a fraction of the bound
+    below; the sparsest figure, coil_radius, several times it). A render's colour bar alone
+    fills a strip along the foot of the first panel and is viridis as the tape is; so each
+    panel is judged above that strip, where only the tape is coloured so: a correct panel shows
+    it over several times the bound below (the coil at 4 rad, mostly behind the hub, the
+    least), a panel without the tape shows none.
+    """
+    from PIL import Image
+
+    from tapecoil.post.render import PANEL
+
+    for name in FIGURES:
         path = run_dir / "figures" / f"{name}.png"
         assert path.is_file(), name
-        # data drawn in colour, not empty axes or a blank window
-        assert _colourful(path) > 0.002, name
+        assert _colourful(path) > 0.0013, name
+    for name in RENDERS:
+        path = run_dir / "figures" / f"{name}.png"
+        assert path.is_file(), name
+        rgb = np.asarray(Image.open(path).convert("RGB"), dtype=float)
+        rows, cols = rgb.shape[0] // PANEL[1], rgb.shape[1] // PANEL[0]
+        assert rows * PANEL[1] == rgb.shape[0] and cols * PANEL[0] == rgb.shape[1], name
+        for r in range(rows):
+            for c in range(cols):
+                panel = rgb[r * PANEL[1] : (r + 1) * PANEL[1], c * PANEL[0] : (c + 1) * PANEL[0]]
+                above_bar = panel[: int(0.8 * PANEL[1])]
+                assert _tape_pixels(above_bar).sum() > 0.005 * PANEL[0] * PANEL[1], (name, r, c)
 
 
 def test_animation_has_a_frame_per_snapshot(run_dir):
@@ -127,14 +157,34 @@ def test_a_phase_keeps_one_camera_for_all_its_frames(run_dir, tmp_path):
 
 
 def test_report_ties_numbers_and_pictures_together(run_dir):
+    """Every picture is shown, and the validation table has a row per validated quantity of
+    summary.json, in its order: its phase, label, computed value and pass mark."""
+    import html as html_lib
+    import re
+
     html = (run_dir / "report.html").read_text()
     for name in EXPECTED:
         assert f'src="figures/{name}.png"' in html, name
     assert 'src="figures/animation.gif"' in html
     summary = json.loads((run_dir / "summary.json").read_text())
-    for row in summary["validation"]:
-        assert row["label"].split(" [")[0] in html
-    assert "pass" in html
+    tables = re.findall(r"<table>(.*?)</table>", html, flags=re.S)
+    validation = next(t for t in tables if "<th>tolerance</th>" in t)
+    rows = [re.findall(r"<td([^>]*)>(.*?)</td>", tr) for tr in re.findall(r"<tr>(.*?)</tr>", validation)]
+    rows = [r for r in rows if r]  # the header row has no <td>
+    assert len(rows) == len(summary["validation"])
+    marks = {True: (' class="pass"', "pass"), False: (' class="fail"', "FAIL"), None: ("", "")}
+    outcomes = {row["passed"] for row in summary["validation"]}
+    assert {True, False} <= outcomes  # this short run has both: the marks are each tested
+    for cells, row in zip(rows, summary["validation"], strict=True):
+        assert len(cells) == 7, cells
+        assert cells[0][1] == row["phase"]
+        assert cells[1][1] == html_lib.escape(row["label"])
+        computed = row["computed"]
+        shown = (
+            "-" if computed is None else f"{computed:.5g}" if isinstance(computed, float) else str(computed)
+        )
+        assert cells[2][1] == shown, row["label"]
+        assert cells[6] == marks[row["passed"]], row["label"]
 
 
 def test_report_command_remakes_the_report(run_dir, capsys):
