@@ -39,6 +39,37 @@ def test_full_integration_locks_where_psri_does_not():
     assert full < 0.9 < 0.99 < psri < 1.02
 
 
+@pytest.mark.parametrize(
+    "surface, element_area",
+    [
+        # a tape's map keeps lengths (sqrt(det a0) = 1): h_e^2 = l1 l2, here 10 mm x b/4
+        (StripGeometry(0.0151, 0.0356, 0.1), 0.01 * 0.0356 / 4),
+        # a quarter cylinder of radius 2 in (length, angle): sqrt(det a0) = 2
+        ("quarter cylinder", 2 * (0.1 / 10) * (math.pi / 2 / 4)),
+    ],
+)
+def test_the_psri_split_uses_the_elements_area_on_the_mid_surface(surface, element_area):
+    """The membrane and shear energies' fully integrated fraction is min(h^2 / h_e^2, 1), h_e^2
+    the element's area on the 3D mid-surface (its parameter area times sqrt(det a0))."""
+    import dolfinx
+    import ufl
+
+    from tapecoil.geometry.surfaces import MappedSurface
+
+    if surface == "quarter cylinder":
+        surface = MappedSurface(
+            lambda xi, ops: (2 * ops.cos(xi[1]), xi[0], 2 * ops.sin(xi[1])), ((0.0, 0.1), (0.0, math.pi / 2))
+        )
+    h = 1e-4
+    strip = create_strip_mesh(MPI.COMM_WORLD, surface, MeshResolution(across=4, along=10))
+    shell = NaghdiShell(strip, ShellMaterial(1e9, 0.3, h))
+    (a0, a1), (b0, b1) = surface.xi_range
+    mean = MPI.COMM_WORLD.allreduce(
+        dolfinx.fem.assemble_scalar(dolfinx.fem.form(shell.quadrature.alpha * ufl.dx(domain=strip.mesh)))
+    ) / ((a1 - a0) * (b1 - b0))
+    assert mean == pytest.approx(h**2 / element_area, rel=1e-10)
+
+
 def test_rollup_two_turns_coarse():
     result = rollup(ROLLUP_MESHES["coarse"], turns=2)
     assert_passed(result)
