@@ -67,6 +67,33 @@ def test_a_fixed_point_props_a_cantilever():
     assert abs(problem.displacement_at((length, 0.0))[2]) < 1e-12  # the prop holds
 
 
+def test_the_newton_count_includes_the_attempts_that_were_cut_back():
+    """A strip rolled by an end moment in one step of a quarter turn, with so few Newton
+    iterations allowed that the step fails and is cut back: each step's record counts the
+    failed attempt's iterations in its total, and the problem's count is the sum of all of them,
+    none lost when the solver is destroyed."""
+    from tapecoil.config import SolverConfig
+
+    length, width, thickness, modulus = 12.0, 1.0, 0.1, 1.2e6
+    problem = ShellProblem(
+        StripGeometry(math.inf, width, length), MeshResolution(1, 8), ShellMaterial(modulus, 0.0, thickness)
+    )
+    problem.clamp("xi1_min")
+    problem.edge_moment("xi1_max", moment=1 / width)
+    quarter = 2 * math.pi * modulus * (width * thickness**3 / 12) / length / 4
+    history = problem.solve(
+        quarter, first_step=quarter, max_step=quarter, solver_config=SolverConfig(max_newton=4)
+    )
+    cut = [r for r in history if r.cutbacks > 0]
+    assert cut, [(r.load, r.iterations) for r in history]
+    for r in cut:
+        assert r.attempts == r.cutbacks + 1
+        assert r.total_iterations > r.iterations
+    assert all(r.total_iterations == r.iterations for r in history if r.attempts == 1)
+    assert problem.newton_iterations == sum(r.total_iterations for r in history)
+    assert problem.newton_iterations > sum(r.iterations for r in history)
+
+
 @pytest.fixture(scope="module")
 def flat():
     return ShellProblem(StripGeometry(math.inf, 1.0, 4.0), MeshResolution(1, 4), ShellMaterial(1e6, 0.0, 0.1))

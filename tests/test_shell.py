@@ -216,6 +216,42 @@ def test_continuation_stops_with_the_last_converged_state():
     assert [round(s.load, 6) for s in run.history] == [0.2, 0.4, 0.5]
 
 
+def test_a_step_record_counts_the_failed_attempts_too():
+    """A step that converges only after a cut-back: its record keeps the accepted attempt's
+    Newton iterations and wall time, and counts every attempt in its totals; the continuation's
+    total also holds the attempts of a step that never converged.
+
+    The model: a solve converges (in 3 iterations) when the load moves by at most 0.3 from the
+    last converged state, and fails otherwise after 7.
+    """
+    from types import SimpleNamespace
+
+    from tapecoil.config import StepControl
+    from tapecoil.core.stepping import Continuation, ContinuationError
+
+    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)))
+    load = {"t": 0.0}
+
+    def solve():
+        ok = load["t"] - state.x.array[0] <= 0.3 + 1e-12 and load["t"] <= 0.75
+        if ok:
+            state.x.array[:] = load["t"]
+        return SimpleNamespace(converged=ok, iterations=3 if ok else 7)
+
+    control = StepControl(initial_step=0.5, max_step=0.5, min_step=0.1, grow=1.0, cutback=0.5, max_cutbacks=3)
+    run = Continuation(solve, lambda t: load.update(t=t), state, control)
+    with pytest.raises(ContinuationError):
+        run.run(0.0, 1.0)
+    # 0.5 fails, 0.25 converges; 0.5 converges; 0.75 converges; 1.0 fails, 0.875 fails, then
+    # the step would be below min_step
+    first = run.history[0]
+    assert (first.load, first.cutbacks, first.attempts) == (0.25, 1, 2)
+    assert (first.iterations, first.total_iterations) == (3, 7 + 3)
+    assert first.total_wall_time >= first.wall_time > 0
+    assert [(r.load, r.attempts, r.total_iterations) for r in run.history[1:]] == [(0.5, 1, 3), (0.75, 1, 3)]
+    assert run.total_iterations == sum(r.total_iterations for r in run.history) + 7 + 7
+
+
 def test_a_refused_state_is_cut_back_and_then_stops_the_run_with_the_last_accepted_one():
     """A converged state the run refuses (a penetration too deep) is not taken: the step is cut
     back as after a failed solve; where no shorter step is accepted either, the run stops with

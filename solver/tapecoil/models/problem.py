@@ -67,7 +67,12 @@ class ShellProblem:
         self.work_per_load = None  # UFL form: the external work of the loads per unit lambda
         self.point_forces: list[PointForce] = []
         self._motions: list[EdgeMotion] = []  # edges turned by the load parameter
-        self.wall_time = 0.0  # of the last solve [s]
+        # of the last solve, every attempt counted (the ones cut back, and a step that never
+        # converged): its wall time [s], Newton iterations, and the solver's timings
+        # (:attr:`SNESSolver.timings`); each step's own are in its StepRecord
+        self.wall_time = 0.0
+        self.newton_iterations = 0
+        self.timings: dict = {}
 
     # --- where things are
     def edge(self, name: str) -> int:
@@ -187,6 +192,10 @@ class ShellProblem:
         converged step (``record.load`` is lambda). ``min_step`` defaults to 1e-6 ``load``;
         ``solver_config``: the ``[solver]`` settings (Newton tolerances, cut-back, PETSc options);
         ``options``: the problem's own PETSc options (without prefix), under those settings'.
+        Returns a :class:`~tapecoil.core.stepping.StepRecord` per converged step: its
+        ``iterations`` are the accepted attempt's, its ``total_iterations`` every attempt's.
+        Afterwards (also after a failure) :attr:`newton_iterations` and :attr:`wall_time` hold
+        the whole solve's, every attempt counted.
         """
         if not (np.isfinite(load) and load > 0):
             raise ValueError(f"solve: load {load} must be positive")
@@ -220,6 +229,8 @@ class ShellProblem:
             )
         finally:
             self.wall_time = time.perf_counter() - t0
+            self.timings = dict(solver.timings)
+            self.newton_iterations = int(solver.timings["iterations"])
             solver.destroy()
 
     def displacement_at(self, point) -> np.ndarray:

@@ -46,6 +46,8 @@ def _info(problem: ShellProblem, history, **extra) -> dict:
         "dofs": global_size(problem.model.W),
         "steps": len(history),
         "newton_iterations": [s.iterations for s in history],
+        # every attempt's, the ones cut back included
+        "newton_iterations_total": problem.newton_iterations,
         "wall_time": problem.wall_time,
         **extra,
     }
