@@ -94,6 +94,42 @@ def test_the_newton_count_includes_the_attempts_that_were_cut_back():
     assert problem.newton_iterations > sum(r.iterations for r in history)
 
 
+SCRIPT = """
+import math
+from tapecoil.geometry.meshes import MeshResolution
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.models.problem import ShellProblem
+from tapecoil.models.shell import ShellMaterial
+
+strip = StripGeometry(math.inf, 1.0, 10.0)
+problem = ShellProblem(strip, MeshResolution(1, 4), ShellMaterial(1.2e6, 0.0, 0.1))
+problem.clamp("xi1_min")
+problem.point_force((10.0, 0.0), force=(0.0, 0.0, 1.0))
+problem.solve(1e-4, first_step=1e-4, max_step=1e-4)
+"""
+
+
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="starts its own process")
+def test_a_users_script_takes_petsc_options_from_its_command_line(tmp_path):
+    """``python3 my_script.py -shell_snes_monitor``: PETSc's monitor of the problem's solver
+    prints, as the ``tapecoil`` command's options do (a fresh process, as a user runs it)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = tmp_path / "my_script.py"
+    script.write_text(SCRIPT)
+    root = Path(__file__).parents[1]
+    plain = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, cwd=root)
+    assert plain.returncode == 0, plain.stderr
+    assert "SNES Function norm" not in plain.stdout
+    run = subprocess.run(
+        [sys.executable, str(script), "-shell_snes_monitor"], capture_output=True, text=True, cwd=root
+    )
+    assert run.returncode == 0, run.stderr
+    assert "SNES Function norm" in run.stdout
+
+
 @pytest.fixture(scope="module")
 def flat():
     return ShellProblem(StripGeometry(math.inf, 1.0, 4.0), MeshResolution(1, 4), ShellMaterial(1e6, 0.0, 0.1))

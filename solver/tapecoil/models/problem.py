@@ -42,7 +42,10 @@ class ShellProblem:
     """A Naghdi shell (:class:`NaghdiShell`, Q2, PSRI by default) on ``surface``, meshed at
     ``resolution``, with supports and loads added by the methods below before :meth:`solve`.
 
-    ``name``: the PETSc options prefix of its solver is ``name + "_"`` (``-name_snes_monitor``);
+    ``name``: the PETSc options prefix of its solver is ``name + "_"`` (unless ``solve`` is
+    given another ``prefix``); any PETSc option for it
+    is given on the command line of the script that solves it, ``python3 my_script.py
+    -shell_snes_monitor`` with the default name, and wins over ``solve``'s settings;
     ``director_frame``: the director's frame, ``"global"`` for tapes (see :mod:`~tapecoil.models.shell`).
     """
 
