@@ -41,6 +41,34 @@ def test_a_map_that_folds_is_refused():
         folded.check()
 
 
+@pytest.mark.parametrize(
+    "functions, fails_on",
+    [
+        (math, "complex parameters"),  # math.sin takes no array: check() fails at once
+        (np, "UFL expressions"),  # numpy's serve the arrays and the complex step, not the forms
+    ],
+)
+def test_a_map_written_without_ops_is_refused_with_the_way_out(functions, fails_on):
+    """math.sin or numpy.sin in place of ops.sin: a TypeError that says to use ops, where the
+    map is first evaluated on what those functions cannot take."""
+    import dolfinx
+    import ufl
+
+    surface = MappedSurface(
+        lambda xi, ops: (2 * functions.cos(xi[1]), xi[0], 2 * functions.sin(xi[1])),
+        ((0.0, 3.0), (0.0, math.pi / 2)),
+    )
+    mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 1, 1)
+
+    def evaluate():
+        surface.check()
+        surface.phi0_ufl(ufl.SpatialCoordinate(mesh))
+
+    way_out = r"Write it with the functions of its ops argument \(ops\.sin, ops\.cos"
+    with pytest.raises(TypeError, match=rf"cannot be evaluated on {fails_on}.*{way_out}"):
+        evaluate()
+
+
 def test_a_mapped_surface_meshes_and_integrates_to_its_area():
     """The shell on the quarter cylinder: its reference area is pi r L / 2."""
     import dolfinx

@@ -57,16 +57,30 @@ class Surface:
         """The three coordinates of phi0 at parameters (xi[0], xi[1]), written with ``ops``."""
         raise NotImplementedError
 
+    def _evaluate(self, xi, ops, on: str) -> tuple:
+        """The map's three coordinates at ``xi`` with ``ops``; a map written with math's or
+        numpy's functions instead of ``ops``'s fails here with the way out said."""
+        try:
+            return tuple(self.map(xi, ops))
+        except (TypeError, AttributeError) as exc:
+            raise TypeError(
+                f"the map of {type(self).__name__} cannot be evaluated on {on} ({exc}). Write it with "
+                "the functions of its ops argument (ops.sin, ops.cos, ops.sqrt, ops.exp, ops.log), "
+                "not math's or numpy's: the same map is evaluated on arrays of parameters, on complex "
+                "ones for its Jacobian and on UFL expressions for the shell's forms, and ops holds the "
+                "functions for each"
+            ) from exc
+
     def phi0(self, xi: np.ndarray) -> np.ndarray:
         """3D mid-surface points (3, n) of parameter points xi (2, n) or (3, n)."""
         xi = np.asarray(xi)
-        return np.vstack(np.broadcast_arrays(*self.map(xi, NUMPY_OPS)))
+        return np.vstack(np.broadcast_arrays(*self._evaluate(xi, NUMPY_OPS, "arrays of parameters")))
 
     def phi0_ufl(self, xi):
         """The map phi0 as a UFL vector of the parameter coordinates (SpatialCoordinate)."""
         import ufl
 
-        return ufl.as_vector(list(self.map(xi, _ufl_ops())))
+        return ufl.as_vector(list(self._evaluate(xi, _ufl_ops(), "UFL expressions (the shell's forms)")))
 
     def jacobian(self, xi: np.ndarray) -> np.ndarray:
         """d phi0 / d xi at parameter points: shape (3, 2, n) (complex-step derivative)."""
@@ -76,7 +90,8 @@ class Surface:
         for k in range(2):
             shifted = xi.astype(complex)
             shifted[k] += 1j * step[k]
-            J[:, k] = np.vstack(np.broadcast_arrays(*self.map(shifted, NUMPY_OPS))).imag / step[k]
+            phi = self._evaluate(shifted, NUMPY_OPS, "complex parameters (its Jacobian by complex step)")
+            J[:, k] = np.vstack(np.broadcast_arrays(*phi)).imag / step[k]
         return J
 
     def frame(self, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
