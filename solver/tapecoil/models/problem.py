@@ -131,7 +131,15 @@ class ShellProblem:
 
     def symmetry_plane(self, edge: str, normal) -> None:
         """The edge lies on a plane of symmetry with unit ``normal`` (+-x, +-y or +-z): see
-        :func:`~tapecoil.models.supports.symmetry_plane`."""
+        :func:`~tapecoil.models.supports.symmetry_plane`.
+
+        The model is then part of the whole shell, and a load lying on the plane is shared
+        with the part cut away: give the model its share. A point force on the plane is halved
+        (P/2 for the whole's P; P/4 at a point on two planes, a quarter model), and so is a
+        force along an edge that lies on the plane; a load off the plane, or along an edge
+        that crosses it, is the whole's own (the cut edge carries half of its length). The
+        loads are stated per model, not per whole shell: nothing here halves them.
+        """
         self.bcs += symmetry_plane(self.model, self._facets(edge), normal, edge)
 
     def fix_point(self, point, directions: str = "xyz") -> None:
@@ -145,7 +153,11 @@ class ShellProblem:
         self.work_per_load = work if self.work_per_load is None else self.work_per_load + work
 
     def point_force(self, point, force) -> None:
-        """A force vector (fixed direction) at the node at ``point``, per unit lambda."""
+        """A force vector (fixed direction) at the node at ``point``, per unit lambda.
+
+        At a point on a plane of symmetry (:meth:`symmetry_plane`) the force is the model's
+        share of the whole shell's: half of it (a quarter on two planes), as for Sze's pinched
+        semicylinder modelled by its half, loaded by P/2."""
         self._require_node(point, "point_force")
         for i, component in enumerate(np.asarray(force, dtype=float)):
             if component != 0.0:
@@ -153,7 +165,10 @@ class ShellProblem:
                 self.point_forces.append(PointForce(dofs, PerUnitLoad(self.load, component)))
 
     def edge_force(self, edge: str, force) -> None:
-        """A force per unit (physical) length of the edge, fixed in direction, per unit lambda."""
+        """A force per unit (physical) length of the edge, fixed in direction, per unit lambda.
+
+        On an edge that lies on a plane of symmetry (:meth:`symmetry_plane`) it is the model's
+        share of the whole's line force there: half of it."""
         f = ufl.as_vector([float(c) for c in force])
         self._add_work(ufl.dot(f, self.model.u) * self._line_element(edge) * self.model.ds(self.edge(edge)))
 
