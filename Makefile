@@ -1,7 +1,8 @@
 # tapecoil: every target runs inside the provisioned environment (tools/env.sh decides which:
 # a host Python with DOLFINx >= 0.9, or a Debian root built on first use).
 #   make demo / make test      the two commands of the README
-#   make run CMD="..."         any command in the environment
+#   make run CMD="..."         any command in the environment, which sees only the project
+#                              directory: a script from elsewhere is copied in first (scratch/)
 # The test targets run on each environment of SUITES (tools/test-suites: the serial selections
 # side by side, one per core, then the MPI ones in turn), provisioning a missing Debian root
 # first, and end with a summary; a failure in any suite fails them:
@@ -50,7 +51,9 @@ shell: setup
 	@$(ENV) shell
 
 # CMD reaches the recipe through the environment, so quotes inside it survive (as in any make
-# argument, a literal dollar is written $$: make run CMD="echo $$HOME").
+# argument, a literal dollar is written $$: make run CMD="echo $$HOME"). Only paths inside the
+# project directory are visible in the environment: a command naming a file elsewhere is
+# refused, saying so; copy the file into the project (e.g. scratch/, git-ignored) and name it there.
 run: export CMD = $(value CMD)
 run: setup
 	@test -n "$$CMD" || { echo 'usage: make run CMD="tapecoil theory"' >&2; exit 2; }

@@ -63,11 +63,30 @@ def test_coil_radius_and_turn_separation(stowed):
 
 
 def test_ploy_length_is_measured_one_turn_in(stowed):
-    ploy = stowed[0]["measures"]["ploy_length_one_turn"]
+    """The ploy region one turn in against Eq. 3.5 (physics brief Sec. 7), L_p = w^2 /
+    (sqrt(70) beta^(1/4) sqrt(R h)), whose prefactor is uncertain: read with the projected
+    width w = 2 R sin(alpha/2) and with the arc width w = b.
+
+    The measure is the distance between two cell midpoints on the centre line (where the
+    transverse curvature passes 0.1/R and 0.9/R), so each end is placed only to within an
+    element: on this mesh it is known to two element lengths. Held to the projected width's
+    reading within that, and short of the arc width's by more than that: the transition is as
+    long as Eq. 3.5 says with the section's projected width.
+    """
+    from tapecoil import theory
+
+    summary, model = stowed
+    ploy = summary["measures"]["ploy_length_one_turn"]
     assert ploy["hub_angle"] == pytest.approx(2 * math.pi)
-    # reported against both readings of Eq. 3.5; the measured transition must at least exist
-    # and lie on the free part
+    tp, beta = model.config.tape, model.config.wall.bending.beta
+    projected = theory.ploy_length(2 * tp.R * math.sin(tp.alpha / 2), tp.R, tp.h, beta)
+    arc = theory.ploy_length(tp.b, tp.R, tp.h, beta)
+    assert ploy["reference_projected_width"] == pytest.approx(projected)
+    assert ploy["reference_arc_width"] == pytest.approx(arc)
+    resolution = 2 * max(model.strip.resolution.element_lengths(tp.L))
     assert ploy["computed"] is not None and 0 < ploy["computed"] < ploy["free_length"]
+    assert abs(ploy["computed"] - projected) < resolution, (ploy["computed"], projected, resolution)
+    assert ploy["computed"] < arc - resolution, (ploy["computed"], arc, resolution)
 
 
 def test_coiling_tension_against_eq_2_6():
@@ -83,7 +102,11 @@ def test_coiling_tension_against_eq_2_6():
         print(json.dumps(study, indent=1))
     assert [case["ratio"] for case in study] == [0.5, 0.6, 0.7, 0.8, 0.9]
     for case in study:
-        assert case["error"] < 0.10, case
+        # the root's clamp holds the whole width flat, as the plate law assumes, so its mean
+        # reading follows Eq. 2.6 closely on every hub; the margin above what these hubs measure
+        # is for the mean over a window that holds only a few periods of the oscillation as
+        # nodes pass the lift-off point (its remainder moves the mean)
+        assert case["error"] < 0.03, case
         assert case["max_penetration"] < 0.5e-4, case
         assert case["coil_energy_per_length"] == pytest.approx(case["edge_layer_energy_per_length"], rel=0.01)
         assert case["edge_rise"] == pytest.approx(case["edge_rise_theory"], rel=0.05)

@@ -184,3 +184,77 @@ def test_annulus():
     pts = np.array([[0.3, 5.0], [6.5, 9.0]])
     fd = (geom.phi0(pts + np.array([[eps], [0.0]])) - geom.phi0(pts - np.array([[eps], [0.0]]))) / (2 * eps)
     assert np.allclose(geom.jacobian(pts)[:, 0], fd, atol=1e-6)
+
+
+def test_across_and_along_count_the_elements_on_the_edges_they_name():
+    """``across`` elements along xi_2 (a tape's width), ``along`` along xi_1 (its length): on a
+    rectangle 1 x 2 of parameters meshed 3 x 5, the nodes' distinct xi_2 are 4 and xi_1 are 6."""
+    from tapecoil.geometry.surfaces import MappedSurface
+
+    flat = MappedSurface(lambda xi, ops: (xi[0], xi[1], 0 * xi[0]), ((0.0, 1.0), (0.0, 2.0)))
+    strip = create_strip_mesh(MPI.COMM_WORLD, flat, MeshResolution(across=3, along=5))
+    x = np.concatenate(MPI.COMM_WORLD.allgather(strip.mesh.geometry.x[:, :2]))
+    # Q1 geometry: the mesh's nodes are the elements' corners
+    assert len(np.unique(np.round(x[:, 0], 12))) == 5 + 1
+    assert len(np.unique(np.round(x[:, 1], 12))) == 3 + 1
+
+
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        ((0, 10), r"across = 0 must be a positive integer \(elements along xi_2, across a tape's width\)"),
+        ((4, -2), r"along = -2 must be a positive integer \(elements along xi_1"),
+        ((4.0, 10), "across = 4.0 must be a positive integer"),
+        ((True, 10), "across = True must be a positive integer"),
+        ((4, "10"), "along = '10' must be a positive integer"),
+        ((4, 10, 0.0), "grading = 0.0 must be a positive number"),
+        ((4, 10, math.inf), "grading = inf must be a positive number"),
+    ],
+)
+def test_a_resolution_that_is_no_element_count_is_refused(arguments, message):
+    with pytest.raises(ValueError, match=message):
+        MeshResolution(*arguments)
+    assert MeshResolution(np.int64(4), 10, 2).across == 4  # numpy integers are counts too
+
+
+def _physical_groups(path) -> dict[str, np.ndarray]:
+    """Each physical group's name -> the coordinates (n, 3) of its nodes, read by gmsh itself."""
+    import gmsh
+
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        groups = {}
+        for dim, tag in gmsh.model.getPhysicalGroups():
+            _, coords = gmsh.model.mesh.getNodesForPhysicalGroup(dim, tag)
+            groups[gmsh.model.getPhysicalName(dim, tag)] = coords.reshape(-1, 3)
+    finally:
+        gmsh.finalize()
+    return groups
+
+
+@pytest.mark.parametrize(
+    "surface, names",
+    [
+        # a tape's strip keeps the names of the tape's edges (ROOT ... SIDE_POS)
+        (StripGeometry(0.0151, 0.0356, 0.5), ("strip", "root", "free_end", "side_neg", "side_pos")),
+        # any other surface names them by the parameter bound each lies on (XI1_MIN ... XI2_MAX)
+        (AnnulusGeometry(6.0, 10.0), ("surface", "xi1_min", "xi1_max", "xi2_min", "xi2_max")),
+    ],
+)
+def test_the_mesh_files_name_the_edges_by_what_they_are(tmp_path, surface, names):
+    """The physical groups of gmsh's model: each edge's name is on the parameter bound it says
+    (the nodes in parameter coordinates: xi_1 first, xi_2 second)."""
+    comm = MPI.COMM_WORLD
+    path = Path(comm.bcast(str(tmp_path), root=0)) / "surface.msh"  # rank 0 writes it
+    create_strip_mesh(comm, surface, MeshResolution(3, 8), msh=path)
+    if comm.rank != 0:
+        return
+    groups = _physical_groups(path)
+    assert set(groups) == set(names)
+    (a0, a1), (b0, b1) = surface.xi_range
+    whole, lo1, hi1, lo2, hi2 = names
+    assert len(groups[whole]) == 4 * 9
+    for name, coordinate, bound in ((lo1, 0, a0), (hi1, 0, a1), (lo2, 1, b0), (hi2, 1, b1)):
+        assert np.allclose(groups[name][:, coordinate], bound, atol=1e-12), name

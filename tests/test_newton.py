@@ -94,6 +94,35 @@ def test_options_do_not_leak_to_the_next_solver():
         s.destroy()
 
 
+def test_the_command_line_options_under_a_prefix_are_read_as_petsc_reads_them():
+    from tapecoil.core.petsc_options import command_line_options
+
+    argv = ["-v", "-shell_snes_rtol", "1e-3", "-shell_snes_monitor", "-other_ksp_view", "-shell_x", "-1"]
+    argv += ["input.toml", "--", "-shell_after_the_end"]
+    assert command_line_options("shell_", argv) == {"snes_rtol": "1e-3", "snes_monitor": "", "x": "-1"}
+    assert command_line_options("other_", argv) == {"ksp_view": ""}
+    assert command_line_options("none_", argv) == {}
+
+
+def test_a_scripts_own_command_line_reaches_its_solver(monkeypatch):
+    """A user's script run as ``python3 script.py -toy_snes_max_it 3`` sets its solver's option,
+    over the configuration's table, only while PETSc reads it (nothing is left behind); an
+    option a caller put in the database itself wins over the command line."""
+    monkeypatch.setattr(sys, "argv", ["script.py", "-toy_snes_max_it", "3", "-toy_snes_type", "ksponly"])
+    s = solver("toy_", SolverConfig(petsc_options={"snes_max_it": 7}))
+    assert s.snes.getTolerances()[3] == 3 and s.snes.getType() == "ksponly"
+    s.destroy()
+    assert held("toy_") == set()
+    opts = PETSc.Options()
+    opts["toy_snes_max_it"] = 5
+    try:
+        s = solver("toy_")
+        assert s.snes.getTolerances()[3] == 5
+        s.destroy()
+    finally:
+        opts.delValue("toy_snes_max_it")
+
+
 def offset_problem(offset):
     """-div grad u + (u - c)^3 = 1, u = c on the boundary, c = ``offset``: the toy problem's
     solution shifted by c, so that a large state norm sits beside a small correction."""

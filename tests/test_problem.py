@@ -67,6 +67,69 @@ def test_a_fixed_point_props_a_cantilever():
     assert abs(problem.displacement_at((length, 0.0))[2]) < 1e-12  # the prop holds
 
 
+def test_the_newton_count_includes_the_attempts_that_were_cut_back():
+    """A strip rolled by an end moment in one step of a quarter turn, with so few Newton
+    iterations allowed that the step fails and is cut back: each step's record counts the
+    failed attempt's iterations in its total, and the problem's count is the sum of all of them,
+    none lost when the solver is destroyed."""
+    from tapecoil.config import SolverConfig
+
+    length, width, thickness, modulus = 12.0, 1.0, 0.1, 1.2e6
+    problem = ShellProblem(
+        StripGeometry(math.inf, width, length), MeshResolution(1, 8), ShellMaterial(modulus, 0.0, thickness)
+    )
+    problem.clamp("xi1_min")
+    problem.edge_moment("xi1_max", moment=1 / width)
+    quarter = 2 * math.pi * modulus * (width * thickness**3 / 12) / length / 4
+    history = problem.solve(
+        quarter, first_step=quarter, max_step=quarter, solver_config=SolverConfig(max_newton=4)
+    )
+    cut = [r for r in history if r.cutbacks > 0]
+    assert cut, [(r.load, r.iterations) for r in history]
+    for r in cut:
+        assert r.attempts == r.cutbacks + 1
+        assert r.total_iterations > r.iterations
+    assert all(r.total_iterations == r.iterations for r in history if r.attempts == 1)
+    assert problem.newton_iterations == sum(r.total_iterations for r in history)
+    assert problem.newton_iterations > sum(r.iterations for r in history)
+
+
+SCRIPT = """
+import math
+from tapecoil.geometry.meshes import MeshResolution
+from tapecoil.geometry.surfaces import StripGeometry
+from tapecoil.models.problem import ShellProblem
+from tapecoil.models.shell import ShellMaterial
+
+strip = StripGeometry(math.inf, 1.0, 10.0)
+problem = ShellProblem(strip, MeshResolution(1, 4), ShellMaterial(1.2e6, 0.0, 0.1))
+problem.clamp("xi1_min")
+problem.point_force((10.0, 0.0), force=(0.0, 0.0, 1.0))
+problem.solve(1e-4, first_step=1e-4, max_step=1e-4)
+"""
+
+
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="starts its own process")
+def test_a_users_script_takes_petsc_options_from_its_command_line(tmp_path):
+    """``python3 my_script.py -shell_snes_monitor``: PETSc's monitor of the problem's solver
+    prints, as the ``tapecoil`` command's options do (a fresh process, as a user runs it)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = tmp_path / "my_script.py"
+    script.write_text(SCRIPT)
+    root = Path(__file__).parents[1]
+    plain = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, cwd=root)
+    assert plain.returncode == 0, plain.stderr
+    assert "SNES Function norm" not in plain.stdout
+    run = subprocess.run(
+        [sys.executable, str(script), "-shell_snes_monitor"], capture_output=True, text=True, cwd=root
+    )
+    assert run.returncode == 0, run.stderr
+    assert "SNES Function norm" in run.stdout
+
+
 @pytest.fixture(scope="module")
 def flat():
     return ShellProblem(StripGeometry(math.inf, 1.0, 4.0), MeshResolution(1, 4), ShellMaterial(1e6, 0.0, 0.1))

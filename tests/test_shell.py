@@ -39,6 +39,37 @@ def test_full_integration_locks_where_psri_does_not():
     assert full < 0.9 < 0.99 < psri < 1.02
 
 
+@pytest.mark.parametrize(
+    "surface, element_area",
+    [
+        # a tape's map keeps lengths (sqrt(det a0) = 1): h_e^2 = l1 l2, here 10 mm x b/4
+        (StripGeometry(0.0151, 0.0356, 0.1), 0.01 * 0.0356 / 4),
+        # a quarter cylinder of radius 2 in (length, angle): sqrt(det a0) = 2
+        ("quarter cylinder", 2 * (0.1 / 10) * (math.pi / 2 / 4)),
+    ],
+)
+def test_the_psri_split_uses_the_elements_area_on_the_mid_surface(surface, element_area):
+    """The membrane and shear energies' fully integrated fraction is min(h^2 / h_e^2, 1), h_e^2
+    the element's area on the 3D mid-surface (its parameter area times sqrt(det a0))."""
+    import dolfinx
+    import ufl
+
+    from tapecoil.geometry.surfaces import MappedSurface
+
+    if surface == "quarter cylinder":
+        surface = MappedSurface(
+            lambda xi, ops: (2 * ops.cos(xi[1]), xi[0], 2 * ops.sin(xi[1])), ((0.0, 0.1), (0.0, math.pi / 2))
+        )
+    h = 1e-4
+    strip = create_strip_mesh(MPI.COMM_WORLD, surface, MeshResolution(across=4, along=10))
+    shell = NaghdiShell(strip, ShellMaterial(1e9, 0.3, h))
+    (a0, a1), (b0, b1) = surface.xi_range
+    mean = MPI.COMM_WORLD.allreduce(
+        dolfinx.fem.assemble_scalar(dolfinx.fem.form(shell.quadrature.alpha * ufl.dx(domain=strip.mesh)))
+    ) / ((a1 - a0) * (b1 - b0))
+    assert mean == pytest.approx(h**2 / element_area, rel=1e-10)
+
+
 def test_rollup_two_turns_coarse():
     result = rollup(ROLLUP_MESHES["coarse"], turns=2)
     assert_passed(result)
@@ -183,6 +214,42 @@ def test_continuation_stops_with_the_last_converged_state():
     assert load["t"] == pytest.approx(0.5)
     # 0.6 fails, the halved step reaches 0.5; beyond it three cut-backs fail and it stops
     assert [round(s.load, 6) for s in run.history] == [0.2, 0.4, 0.5]
+
+
+def test_a_step_record_counts_the_failed_attempts_too():
+    """A step that converges only after a cut-back: its record keeps the accepted attempt's
+    Newton iterations and wall time, and counts every attempt in its totals; the continuation's
+    total also holds the attempts of a step that never converged.
+
+    The model: a solve converges (in 3 iterations) when the load moves by at most 0.3 from the
+    last converged state, and fails otherwise after 7.
+    """
+    from types import SimpleNamespace
+
+    from tapecoil.config import StepControl
+    from tapecoil.core.stepping import Continuation, ContinuationError
+
+    state = SimpleNamespace(x=SimpleNamespace(array=np.zeros(1)))
+    load = {"t": 0.0}
+
+    def solve():
+        ok = load["t"] - state.x.array[0] <= 0.3 + 1e-12 and load["t"] <= 0.75
+        if ok:
+            state.x.array[:] = load["t"]
+        return SimpleNamespace(converged=ok, iterations=3 if ok else 7)
+
+    control = StepControl(initial_step=0.5, max_step=0.5, min_step=0.1, grow=1.0, cutback=0.5, max_cutbacks=3)
+    run = Continuation(solve, lambda t: load.update(t=t), state, control)
+    with pytest.raises(ContinuationError):
+        run.run(0.0, 1.0)
+    # 0.5 fails, 0.25 converges; 0.5 converges; 0.75 converges; 1.0 fails, 0.875 fails, then
+    # the step would be below min_step
+    first = run.history[0]
+    assert (first.load, first.cutbacks, first.attempts) == (0.25, 1, 2)
+    assert (first.iterations, first.total_iterations) == (3, 7 + 3)
+    assert first.total_wall_time >= first.wall_time > 0
+    assert [(r.load, r.attempts, r.total_iterations) for r in run.history[1:]] == [(0.5, 1, 3), (0.75, 1, 3)]
+    assert run.total_iterations == sum(r.total_iterations for r in run.history) + 7 + 7
 
 
 def test_a_refused_state_is_cut_back_and_then_stops_the_run_with_the_last_accepted_one():

@@ -127,7 +127,54 @@ in_root() {
     mount --rbind /dev "$R/dev" && mount -t proc proc "$R/proc" && mount --rbind /sys "$R/sys" &&
       mkdir -p "$R$P" && mount --bind "$P" "$R$P" || { echo "tapecoil env: mounting into $R failed" >&2; exit 97; }
     exec chroot "$R" /usr/bin/env -i "$@"
-  ' sh "$ROOT" "$PROJECT" "${envargs[@]}" /bin/sh -c 'cd "$1" || exit 1; shift; exec "$@"' sh "$cwd" "$@"
+  ' sh "$ROOT" "$PROJECT" "${envargs[@]}" /bin/sh -c "$ENTER" sh "$cwd" "$PROJECT" "$@"
+}
+
+# Inside the root (sh): go to the directory $1 and run the command after $2, the project
+# directory, which is all of this machine the root sees.
+ENTER='cd "$1" 2>/dev/null || {
+  echo "tapecoil env: $1 is not visible in the environment: only paths inside the project directory $2 are; work from inside it (copy what you need there, e.g. into $2/scratch/)" >&2
+  exit 1
+}
+shift 2
+exec "$@"'
+
+# The words of a command (split at blanks, and after an "=") that name a file or directory of
+# this machine outside the project which the Debian root does not have at the same place:
+# inside the environment they do not exist. FROM: the directory relative words are read from
+# here; INSIDE: the one the command runs in inside the root. /dev, /proc and /sys are bound
+# into the root (in_root), so the machine's own are seen there.
+invisible_paths() {
+  local from=$1 inside=$2 arg word candidate host there real
+  local -a words
+  shift 2
+  for arg in "$@"; do
+    read -r -a words <<<"$arg" || true
+    for word in "${words[@]}"; do
+      word=${word//[\'\"]/}
+      for candidate in "$word" "${word#*=}"; do
+        [[ -n $candidate && $candidate != -* ]] || continue
+        if [[ $candidate == /* ]]; then
+          host=$candidate there=$ROOT$candidate
+        else
+          host=$from/$candidate there=$ROOT$inside/$candidate
+        fi
+        [[ -e $host ]] || continue
+        real=$(realpath -- "$host")
+        case $real in /dev | /dev/* | /proc | /proc/* | /sys | /sys/*) continue ;; esac
+        [[ $real == "$PROJECT" || $real == "$PROJECT"/* || -e $there ]] || echo "$candidate"
+        [[ $candidate == "$word" && $word == *=* ]] || break
+      done
+    done
+  done | sort -u
+}
+
+# Refuse a command that names files the environment cannot see, saying what to do instead.
+check_visible() {
+  local missing
+  missing=$(invisible_paths "$@")
+  [[ -z $missing ]] && return 0
+  die "the command names $(echo $missing | sed 's/ /, /g'), outside the project directory $PROJECT: only paths inside the project directory are visible in the environment (the Debian root has its own filesystem). Copy what the command needs into the project, e.g. into $PROJECT/scratch/, and name it there (make run CMD=\"python3 scratch/my_script.py\")."
 }
 
 # Snapshot mirrors serve Release files past their Valid-Until date (sid's expire within
@@ -188,6 +235,9 @@ setup_root() {
 
 # --- commands ----------------------------------------------------------------------------
 
+# sourced (the tests read the functions above): define them and do nothing
+[[ ${BASH_SOURCE[0]} == "$0" ]] || return 0
+
 cmd=${1:-}
 shift || true
 MODE=$(mode) || exit 1
@@ -202,8 +252,12 @@ case "$cmd" in
       exec "$@"
     fi
     setup_root
-    cwd=$(pwd -P)
-    [[ $cwd == "$PROJECT"* ]] || cwd=$PROJECT
+    here=$(pwd -P) cwd=$(pwd -P)
+    if [[ $cwd != "$PROJECT" && $cwd != "$PROJECT"/* ]]; then
+      cwd=$PROJECT
+      say "$here is outside the project, which is all the environment sees: running in $PROJECT"
+    fi
+    check_visible "$here" "$cwd" "$@"
     in_root "$cwd" "$@"
     ;;
   shell)

@@ -4,22 +4,14 @@ from __future__ import annotations
 
 import sys
 
+from tapecoil.core.petsc_options import is_option_value
+
 PETSC_EPILOG = (
     "PETSc options for a solver go after tapecoil's own arguments, under the solver's prefix: "
     "coil_ (flattening and coiling), deploy_ (deployment), verify_<case>_ (the case's dashes as "
     "underscores), e.g. tapecoil coil --mesh coarse -coil_snes_monitor. They win over the "
     "configuration's petsc_options tables."
 )
-
-
-def _is_value(arg: str) -> bool:
-    if not arg.startswith("-"):
-        return True
-    try:
-        float(arg)
-    except ValueError:
-        return False
-    return True
 
 
 def split_petsc_options(argv: list[str], known: set[str]) -> tuple[list[str], list[str]]:
@@ -40,7 +32,7 @@ def split_petsc_options(argv: list[str], known: set[str]) -> tuple[list[str], li
             break
         if len(arg) > 1 and arg[0] == "-" and arg[1].isalpha() and arg.split("=", 1)[0] not in known:
             petsc.append(arg)
-            if i + 1 < len(argv) and _is_value(argv[i + 1]):
+            if i + 1 < len(argv) and is_option_value(argv[i + 1]):
                 petsc.append(argv[i + 1])
                 i += 1
         else:

@@ -52,10 +52,9 @@ class PairsAtState:
 # be 30 x 147 entries a pair and widen the factorisation. It is applied instead, exactly, in a
 # GMRES preconditioned by the factorised assembled matrix. The force along the partner's
 # smoothed normal is not the gradient of an energy, so neither matrix is symmetric: LU, not
-# MUMPS' LDL^T. PETSc's divergence test (1e4 times the first residual) stays: without it
-# (measured with 1e300) the default-mesh coiling ran away at 0.575 rad, no step converging in
-# 4 min while each rank grew to 4.7 GB, where the test cuts the step back and the run goes on
-# (docs/coiling.md)
+# MUMPS' LDL^T. PETSc's divergence test (1e4 times the first residual) stays: without it a
+# step of the default-mesh coiling whose Newton runs away goes on for minutes, its memory
+# growing, where the test cuts the step back and the run goes on (docs/coiling.md)
 SOLVER_OPTIONS = {
     "pc_type": "lu",
     "ksp_type": "gmres",

@@ -14,8 +14,9 @@ from petsc4py import PETSc
 # The residual's round-off floor over the part of it that the state's rounding explains: the
 # evaluation of the residual rounds too, in sums of terms each about as large as J x, and a
 # residual that carries other data (a time step's previous velocity and acceleration) rounds
-# those. Measured stagnation levels: 0.46 to 0.58 of |J d| (shell coiling, relaxation solves),
-# 5.5 (generalized-alpha oscillators, whose state has decayed below the previous step's data)
+# those. The stagnation levels seen lie below this margin: under |J d| in the shell's coiling
+# and relaxation solves, a few |J d| in generalized-alpha oscillators, whose state has decayed
+# below the previous step's data
 ROUND_OFF_MARGIN = 10.0
 
 

@@ -2,8 +2,9 @@
 
 Newton with a line search and a direct solver (MUMPS) by default. Each solver has an options
 prefix named by its caller (``coil_``, ``deploy_``, ``verify_rollup_``), as DOLFINx's
-NonlinearProblem has, so that any PETSc option can be set for it on the command line
-(``-coil_snes_monitor``). The wrapper owns its vectors and matrix and assembles the residual
+NonlinearProblem has, so that any PETSc option can be set for it on the command line of the
+``tapecoil`` command or of a user's script (``-coil_snes_monitor``; see
+:mod:`~tapecoil.core.petsc_options`). The wrapper owns its vectors and matrix and assembles the residual
 with Dirichlet conditions applied by lifting, so that a Newton iterate that does not yet satisfy
 the (changed) boundary values is driven onto them: the residual on a constrained dof is x - g.
 """

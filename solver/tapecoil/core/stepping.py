@@ -44,7 +44,15 @@ class ContinuationError(RuntimeError):
 
 @dataclass
 class StepRecord:
-    """One converged load step; ``next_step`` is the step the continuation will try next."""
+    """One converged load step; ``next_step`` is the step the continuation will try next.
+
+    ``iterations`` and ``wall_time`` are those of the accepted attempt alone: its Newton
+    iterations (for a step relaxed through a snap, those of the pseudo-time solves and the
+    plain solve that finished it) and its wall time [s]. What the step cost in all is
+    ``total_iterations`` and ``total_wall_time``: every attempt at it counted, the ones that
+    failed and were cut back, refused or rejected as inaccurate included; ``attempts`` is how
+    many there were (a relaxation through a snap counts as one).
+    """
 
     load: float
     step: float
@@ -55,6 +63,15 @@ class StepRecord:
     next_step: float = 0.0
     error: float | None = None  # the accuracy estimate over its tolerance (error-controlled steps)
     rejected: int = 0  # converged attempts rejected as inaccurate before this one
+    attempts: int = 1
+    total_iterations: int | None = None  # None: the accepted attempt's (a record of one attempt)
+    total_wall_time: float | None = None
+
+    def __post_init__(self):
+        if self.total_iterations is None:
+            self.total_iterations = self.iterations
+        if self.total_wall_time is None:
+            self.total_wall_time = self.wall_time
 
 
 @dataclass
@@ -101,6 +118,9 @@ class Continuation:
     commit: Callable[[], None] | None = None
     easy_iterations: int = 5
     history: list[StepRecord] = field(default_factory=list)
+    # Newton iterations of every attempt of :meth:`run`, the failed ones and those of a step
+    # that never converged (a run stopped by ContinuationError) included
+    total_iterations: int = 0
 
     def _snapshot(self):
         """A copy of the state (a Function's local array, or what a joint state's ``snapshot`` gives)."""
@@ -178,6 +198,9 @@ class Continuation:
         dt = ctl.initial_step * span if first_step is None else first_step
         saved = self._snapshot()
         cutbacks = rejected = 0
+        # every attempt at the step under way: how many, their Newton iterations, since when
+        attempts = spent = 0
+        started = None
         # cut-backs of the steps accepted since the last one that needed none
         limping = 0
         while marks:
@@ -185,11 +208,16 @@ class Continuation:
             if (target - marks[0]) * math.copysign(1, span) >= -1e-12 * abs(span):
                 target = marks[0]
             t0 = time.perf_counter()
+            if started is None:
+                started = t0
             self.set_load(target)
             if self.predict is not None:
                 self.predict(t, target)
             result = self.solve()
             iterations, relaxed = result.iterations, False
+            attempts += 1
+            spent += iterations
+            self.total_iterations += iterations
             refused = self.refusal() if (result.converged and self.refusal is not None) else None
             if not result.converged or refused is not None:
                 self._restore(saved)
@@ -210,6 +238,9 @@ class Continuation:
                         t,
                     )
                 ok, iterations = self._relax(target)
+                attempts += 1
+                spent += iterations
+                self.total_iterations += iterations
                 if not ok:
                     self._restore(saved)
                     self.set_load(t)
@@ -248,12 +279,25 @@ class Continuation:
             dt = math.copysign(min(abs(dt), ctl.max_step * abs(span)), span)
             if relaxed:  # restart gently after a snap
                 dt = ctl.initial_step * span
+            now = time.perf_counter()
             record = StepRecord(
-                target, step, iterations, cutbacks, relaxed, time.perf_counter() - t0, dt, error, rejected
+                target,
+                step,
+                iterations,
+                cutbacks,
+                relaxed,
+                now - t0,
+                dt,
+                error,
+                rejected,
+                attempts=attempts,
+                total_iterations=spent,
+                total_wall_time=now - started,
             )
             self.history.append(record)
             limping = 0 if (cutbacks == 0 or relaxed) else limping + cutbacks
-            cutbacks = rejected = 0
+            cutbacks = rejected = attempts = spent = 0
+            started = None
             if self.on_step is not None:
                 self.on_step(record)
         return self.history

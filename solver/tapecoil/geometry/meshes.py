@@ -21,6 +21,8 @@ are one and the same surface.
 
 from __future__ import annotations
 
+import math
+import numbers
 import sys
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -42,6 +44,11 @@ STRIP = 1
 XI1_MIN, XI1_MAX, XI2_MIN, XI2_MAX = 1, 2, 3, 4
 # the same edges as a tape's: its root, its free end and its two long sides
 ROOT, FREE_END, SIDE_NEG, SIDE_POS = XI1_MIN, XI1_MAX, XI2_MIN, XI2_MAX
+# The names of the physical groups in gmsh's model (and its .msh files): a general surface's
+# edges by the parameter bound they lie on, a tape's strip by what they are on the tape. The
+# tags are the same; only the names differ.
+EDGE_NAMES = {XI1_MIN: "xi1_min", XI1_MAX: "xi1_max", XI2_MIN: "xi2_min", XI2_MAX: "xi2_max"}
+TAPE_EDGE_NAMES = {ROOT: "root", FREE_END: "free_end", SIDE_NEG: "side_neg", SIDE_POS: "side_pos"}
 
 # The preset mesh resolutions are kept in meshes/presets.toml at the top of the project, where
 # they are read and changed; this package reaches it through the link presets.toml beside this
@@ -77,11 +84,35 @@ PRESETS = load_presets()
 
 @dataclass(frozen=True)
 class MeshResolution:
-    """Number of elements across the width and along the length, and the length grading."""
+    """The structured mesh of a parameter rectangle: how many elements in each direction.
+
+    ``across``: elements along the second parameter xi_2, i.e. on each of the edges xi1_min and
+    xi1_max; on a tape, across its width (from side to side). ``along``: elements along the
+    first parameter xi_1, i.e. on each of the edges xi2_min and xi2_max; on a tape, along its
+    length (from the root to the free end). ``grading``: the last element along xi_1 over the
+    first (1: all the same length; above 1 they grow towards xi1_max, the free end). A general
+    surface is meshed the same way: e.g. on the slit annulus (xi_1 the polar angle, xi_2 the
+    radius) ``along`` elements go round it and ``across`` elements span the radius.
+    """
 
     across: int
     along: int
     grading: float = 1.0
+
+    def __post_init__(self):
+        for name, what in (
+            ("across", "elements along xi_2, across a tape's width"),
+            ("along", "elements along xi_1, along a tape's length"),
+        ):
+            value = getattr(self, name)
+            if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < 1:
+                raise ValueError(f"MeshResolution: {name} = {value!r} must be a positive integer ({what})")
+        grading = self.grading
+        if isinstance(grading, bool) or not isinstance(grading, numbers.Real) or not 0 < grading < math.inf:
+            raise ValueError(
+                f"MeshResolution: grading = {grading!r} must be a positive number (the last element "
+                "along xi_1 over the first)"
+            )
 
     @classmethod
     def from_config(cls, mesh: MeshConfig, length: float) -> MeshResolution:
@@ -107,7 +138,8 @@ def build_strip_gmsh(geom: StripGeometry, res: MeshResolution) -> None:
 
     A structured quadrilateral mesh: ``res.across`` elements across, ``res.along`` along
     (element length growing by ``res.grading`` from root to free end). Physical groups: the
-    surface (STRIP) and the edges ROOT (x = start), FREE_END (x = start + L), SIDE_NEG and SIDE_POS.
+    surface ("strip", tag STRIP) and the edges "root" (ROOT, x = start), "free_end" (FREE_END,
+    x = start + L), "side_neg" and "side_pos" (SIDE_NEG and SIDE_POS, the sides at y < 0 and y > 0).
     """
     import gmsh
 
@@ -141,11 +173,16 @@ def build_strip_gmsh(geom: StripGeometry, res: MeshResolution) -> None:
     if len(edges) != 4:  # pragma: no cover - geometry construction is deterministic
         raise RuntimeError(f"could not identify the strip's four edges: {edges}")
 
-    _tag_and_mesh(surface, edges, res, x_root=x0, x_end=x0 + geom.length)
+    _tag_and_mesh(surface, edges, res, x_root=x0, x_end=x0 + geom.length, names=("strip", TAPE_EDGE_NAMES))
 
 
 def _build_parameter_rectangle(xi_range, res: MeshResolution) -> None:
-    """Structured quadrilateral mesh of a parameter rectangle with the four edges tagged."""
+    """Structured quadrilateral mesh of a parameter rectangle with the four edges tagged.
+
+    Physical groups: the surface ("surface", tag STRIP) and its edges by the parameter bound each
+    lies on, "xi1_min", "xi1_max", "xi2_min" and "xi2_max" (tags XI1_MIN ... XI2_MAX), the names
+    :class:`~tapecoil.models.problem.ShellProblem` gives them.
+    """
     import gmsh
 
     (x0, x1), (y0, y1) = xi_range
@@ -160,24 +197,35 @@ def _build_parameter_rectangle(xi_range, res: MeshResolution) -> None:
             edges[XI1_MAX] = tag
         else:
             edges[XI2_MIN if abs(cy - y0) < abs(cy - y1) else XI2_MAX] = tag
-    _tag_and_mesh(surface, edges, res, x_root=x0, x_end=x1)
+    _tag_and_mesh(surface, edges, res, x_root=x0, x_end=x1, names=("surface", EDGE_NAMES))
 
 
 def _tag_and_mesh(
-    surface: int, edges: dict[int, int], res: MeshResolution, x_root: float, x_end: float
+    surface: int,
+    edges: dict[int, int],
+    res: MeshResolution,
+    x_root: float,
+    x_end: float,
+    names: tuple[str, dict[int, str]],
 ) -> None:
-    """Physical groups for the surface and its four edges, then the structured quad mesh."""
+    """Physical groups for the surface and its four edges, then the structured quad mesh.
+
+    ``edges``: edge tag (XI1_MIN ...) -> gmsh curve; ``names``: the surface's group name and
+    each edge tag's name.
+    """
     import gmsh
 
-    gmsh.model.addPhysicalGroup(2, [surface], tag=STRIP, name="strip")
-    for name, tag in (("root", ROOT), ("free_end", FREE_END), ("side_neg", SIDE_NEG), ("side_pos", SIDE_POS)):
-        gmsh.model.addPhysicalGroup(1, [edges[tag]], tag=tag, name=name)
+    surface_name, edge_names = names
+    gmsh.model.addPhysicalGroup(2, [surface], tag=STRIP, name=surface_name)
+    for tag in (XI1_MIN, XI1_MAX, XI2_MIN, XI2_MAX):
+        gmsh.model.addPhysicalGroup(1, [edges[tag]], tag=tag, name=edge_names[tag])
     mesh = gmsh.model.mesh
-    for tag in (edges[ROOT], edges[FREE_END]):
+    # the edges xi_1 = const carry the elements across (along xi_2), the others those along xi_1
+    for tag in (edges[XI1_MIN], edges[XI1_MAX]):
         mesh.setTransfiniteCurve(tag, res.across + 1)
     ratio = _progression(res.along, res.grading)
-    for side in (SIDE_NEG, SIDE_POS):
-        # a side edge may run either way: grade it from the root end
+    for side in (XI2_MIN, XI2_MAX):
+        # an edge along xi_1 may run either way: grade it from the xi1_min end (a tape's root)
         tag = edges[side]
         start = gmsh.model.getBoundary([(1, tag)], oriented=True)[0][1]
         x_start = gmsh.model.getValue(0, start, [])[0]

@@ -46,8 +46,9 @@ class Surface:
     functions of ``ops`` (sin, cos, sqrt, exp, log); the numpy map, the UFL map of the shell's
     forms and the Jacobian (the complex-step derivative of the numpy map, exact to round-off)
     all follow from it, so they cannot disagree. Edge tags (:mod:`tapecoil.geometry.meshes`):
-    XI1_MIN, XI1_MAX, XI2_MIN and XI2_MAX, the parameter bound each edge lies on (a tape's
-    root, free end and sides).
+    XI1_MIN, XI1_MAX, XI2_MIN and XI2_MAX, the parameter bound each edge lies on, named so in
+    the mesh's physical groups ("xi1_min" ...); a tape's strip names them by what they are on
+    the tape ("root", "free_end", "side_neg", "side_pos").
     """
 
     xi_range: tuple[tuple[float, float], tuple[float, float]]
@@ -56,16 +57,30 @@ class Surface:
         """The three coordinates of phi0 at parameters (xi[0], xi[1]), written with ``ops``."""
         raise NotImplementedError
 
+    def _evaluate(self, xi, ops, on: str) -> tuple:
+        """The map's three coordinates at ``xi`` with ``ops``; a map written with math's or
+        numpy's functions instead of ``ops``'s fails here with the way out said."""
+        try:
+            return tuple(self.map(xi, ops))
+        except (TypeError, AttributeError) as exc:
+            raise TypeError(
+                f"the map of {type(self).__name__} cannot be evaluated on {on} ({exc}). Write it with "
+                "the functions of its ops argument (ops.sin, ops.cos, ops.sqrt, ops.exp, ops.log), "
+                "not math's or numpy's: the same map is evaluated on arrays of parameters, on complex "
+                "ones for its Jacobian and on UFL expressions for the shell's forms, and ops holds the "
+                "functions for each"
+            ) from exc
+
     def phi0(self, xi: np.ndarray) -> np.ndarray:
         """3D mid-surface points (3, n) of parameter points xi (2, n) or (3, n)."""
         xi = np.asarray(xi)
-        return np.vstack(np.broadcast_arrays(*self.map(xi, NUMPY_OPS)))
+        return np.vstack(np.broadcast_arrays(*self._evaluate(xi, NUMPY_OPS, "arrays of parameters")))
 
     def phi0_ufl(self, xi):
         """The map phi0 as a UFL vector of the parameter coordinates (SpatialCoordinate)."""
         import ufl
 
-        return ufl.as_vector(list(self.map(xi, _ufl_ops())))
+        return ufl.as_vector(list(self._evaluate(xi, _ufl_ops(), "UFL expressions (the shell's forms)")))
 
     def jacobian(self, xi: np.ndarray) -> np.ndarray:
         """d phi0 / d xi at parameter points: shape (3, 2, n) (complex-step derivative)."""
@@ -75,7 +90,8 @@ class Surface:
         for k in range(2):
             shifted = xi.astype(complex)
             shifted[k] += 1j * step[k]
-            J[:, k] = np.vstack(np.broadcast_arrays(*self.map(shifted, NUMPY_OPS))).imag / step[k]
+            phi = self._evaluate(shifted, NUMPY_OPS, "complex parameters (its Jacobian by complex step)")
+            J[:, k] = np.vstack(np.broadcast_arrays(*phi)).imag / step[k]
         return J
 
     def frame(self, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -88,29 +104,70 @@ class Surface:
         return t1, t2, n0
 
     def check(self, samples: int = 7, tolerance: float = 1e-6) -> float:
-        """Check the surface over its parameter rectangle; the largest discrepancy found.
+        """Check the surface over its closed parameter rectangle; the largest discrepancy found.
 
-        The Jacobian against central finite differences of phi0 (relative to its size), and a
-        regular map (tangents of non-zero length, not parallel). Raises ValueError beyond
-        ``tolerance``: a map that is not smooth where it is sampled, or that folds.
+        Sampled on a ``samples`` x ``samples`` grid that includes the rectangle's edges and
+        corners: the Jacobian against finite differences of phi0 (central inside, one-sided on
+        the edges, so that the map is not evaluated outside its rectangle; relative to the
+        Jacobian's size), and a regular map: a non-zero area element |d phi0/d xi_1 x d phi0/d
+        xi_2| everywhere. Raises ValueError beyond ``tolerance`` (a map that is not smooth where
+        it is sampled) and where the area element vanishes (tangents parallel or of zero
+        length: a fold, or a pole such as a sphere's, where no shell can be formulated), naming
+        the parameter points and the edges they lie on.
         """
+        if samples < 2:
+            raise ValueError(f"check: samples = {samples} must be at least 2 (the rectangle's edges)")
         (a0, a1), (b0, b1) = self.xi_range
-        g = np.linspace(0.05, 0.95, samples)
+        g = np.linspace(0.0, 1.0, samples)
         xi = np.vstack([np.repeat(a0 + g * (a1 - a0), samples), np.tile(b0 + g * (b1 - b0), samples)])
         J = self.jacobian(xi)
         scale = np.abs(J).max()
         worst = 0.0
-        for k, h in enumerate(1e-6 * np.array([a1 - a0, b1 - b0])):
+        for k, (lo, hi) in enumerate(self.xi_range):
+            h = 1e-6 * (hi - lo)
             e = np.zeros((2, 1))
             e[k] = h
-            fd = (self.phi0(xi + e) - self.phi0(xi - e)) / (2 * h)
+            low, high = (np.isclose(xi[k], bound, rtol=0, atol=h) for bound in (lo, hi))
+            inside = ~(low | high)
+            fd = np.empty((3, xi.shape[1]))
+            p = xi[:, inside]
+            fd[:, inside] = (self.phi0(p + e) - self.phi0(p - e)) / (2 * h)
+            # second-order one-sided differences on the edges, from inside the rectangle
+            for edge, sign in ((low, 1.0), (high, -1.0)):
+                p = xi[:, edge]
+                f0, f1, f2 = (self.phi0(p + sign * m * e) for m in (0, 1, 2))
+                fd[:, edge] = sign * (-3 * f0 + 4 * f1 - f2) / (2 * h)
             worst = max(worst, float(np.abs(fd - J[:, k]).max() / scale))
         area = np.linalg.norm(np.cross(J[:, 0].T, J[:, 1].T), axis=1)
         if worst > tolerance:
             raise ValueError(f"the Jacobian of {type(self).__name__} disagrees with phi0 by {worst:.3g}")
-        if np.any(area <= 1e-12 * scale**2):
-            raise ValueError(f"{type(self).__name__} is singular (parallel tangents) where it was sampled")
+        singular = area <= 1e-12 * scale**2
+        if np.any(singular):
+            where = [self._describe_point(point) for point in xi[:, singular].T]
+            shown = "; ".join(where[:4]) + (f"; and {len(where) - 4} more" if len(where) > 4 else "")
+            raise ValueError(
+                f"{type(self).__name__} is singular (zero area element: the tangents d phi0/d xi_1 and "
+                f"d phi0/d xi_2 are parallel or vanish) at xi = {shown}. No shell can be formulated "
+                "there: a map that folds, or a pole such as a sphere's, which must be left out of the "
+                "parameter rectangle (e.g. a small hole about it)"
+            )
         return worst
+
+    def _describe_point(self, point) -> str:
+        """A parameter point and the edges of the rectangle it lies on."""
+        names = []
+        for k, (lo, hi) in enumerate(self.xi_range):
+            tol = 1e-9 * (hi - lo)
+            if abs(point[k] - lo) <= tol:
+                names.append(f"xi{k + 1}_min")
+            elif abs(point[k] - hi) <= tol:
+                names.append(f"xi{k + 1}_max")
+        text = f"({point[0]:.6g}, {point[1]:.6g})"
+        if len(names) == 2:
+            return f"{text} (the corner of {names[0]} and {names[1]})"
+        if names:
+            return f"{text} (on the edge {names[0]})"
+        return f"{text} (inside)"
 
     def build_gmsh(self, res: MeshResolution) -> None:
         """Mesh the parameter rectangle in the current gmsh model, nodes in parameter coordinates."""
@@ -184,8 +241,8 @@ class StripGeometry(Surface):
 class AnnulusGeometry(Surface):
     """A flat annulus R_inner <= r <= R_outer in the x-y plane, slit along the +x axis.
 
-    Parameters: xi_1 = polar angle (0 to 2 pi, the slit's two edges are ROOT and FREE_END),
-    xi_2 = radius (SIDE_NEG inner, SIDE_POS outer edge).
+    Parameters: xi_1 = polar angle (0 to 2 pi, the slit's two edges are "xi1_min" and "xi1_max"),
+    xi_2 = radius ("xi2_min" the inner, "xi2_max" the outer edge).
     """
 
     R_inner: float

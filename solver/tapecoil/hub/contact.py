@@ -27,19 +27,18 @@ The winding angle is kept in both: the predictor, the measures and the pictures 
 
 The bracket <g> is smoothed over a width delta (delta softplus(g/delta), ``contact.smoothing``
 = delta/h, default 1/20): with the plain bracket Newton cycles as nodes enter and leave
-contact. Newton iterations (all attempts) on the coarse benchmark to 6 rad, final step
-settings, spiral: 885 plain, 579 with delta = h/20, 1533 with h/200; energies equal to 4e-6
-and the same largest penetration (0.1 h). The price of h/20: the tape rests a few delta (5 um)
-off the coil and, near the lift-off point, that extra support lowers the coiling tension (the
-axial-force balance of the coiling module) by about 0.03 N. So the coiling-tension study uses
-the plain bracket.
+contact. On the coarse benchmark h/20 takes fewer Newton iterations than the plain bracket
+and than h/200, with the same energies and largest penetration (docs/coiling.md). The price
+of h/20: the tape rests a few delta off the coil and, near the lift-off point, that extra
+support lowers the coiling tension (the axial-force balance of the coiling module) a little.
+So the coiling-tension study uses the plain bracket.
 
 The default stiffness k = E h / (100 l^2) (l the element length along the tape) makes the
 contact stiffness of an element, k l^2, one hundredth of the membrane stiffness E h of the
-element it pushes on. Measured on the benchmark coarse mesh with the spiral: with k l^2 = E h,
-Newton chattered between contact sets and the run stalled at 3 rad; with E h / 100 it coils
-the whole 36 rad with the largest penetration about 0.4 h (at the climbs over the root step, at
-the end of the run) and typically below 0.1 h; with E h / 10^4 the turns sank by 3 h.
+element it pushes on. On the benchmark's coarse mesh with the spiral: with k l^2 = E h,
+Newton chattered between contact sets and the run stalled early; with E h / 100 it coils the
+whole 36 rad, the turns sinking into each other by a fraction of h (the most at the climbs
+over the root step); with E h / 10^4 the turns sank by several h.
 """
 
 from __future__ import annotations

@@ -28,20 +28,24 @@ from tapecoil.config import SolverConfig
 from tapecoil.core.dofs import global_scalar, node_value, owned_node_dofs
 from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
-from tapecoil.geometry.meshes import XI1_MAX, XI1_MIN, XI2_MAX, XI2_MIN, MeshResolution, create_strip_mesh
+from tapecoil.geometry.meshes import EDGE_NAMES, MeshResolution, create_strip_mesh
 from tapecoil.geometry.surfaces import Surface
 from tapecoil.models.edges import EdgeMotion, clamp
 from tapecoil.models.shell import NaghdiShell, ShellMaterial
 from tapecoil.models.supports import fixed_point, symmetry_plane
 
-EDGES = {"xi1_min": XI1_MIN, "xi1_max": XI1_MAX, "xi2_min": XI2_MIN, "xi2_max": XI2_MAX}
+# the edges by name (the names of the mesh's physical groups for a general surface)
+EDGES = {name: tag for tag, name in EDGE_NAMES.items()}
 
 
 class ShellProblem:
     """A Naghdi shell (:class:`NaghdiShell`, Q2, PSRI by default) on ``surface``, meshed at
     ``resolution``, with supports and loads added by the methods below before :meth:`solve`.
 
-    ``name``: the PETSc options prefix of its solver is ``name + "_"`` (``-name_snes_monitor``);
+    ``name``: the PETSc options prefix of its solver is ``name + "_"`` (unless ``solve`` is
+    given another ``prefix``); any PETSc option for it
+    is given on the command line of the script that solves it, ``python3 my_script.py
+    -shell_snes_monitor`` with the default name, and wins over ``solve``'s settings;
     ``director_frame``: the director's frame, ``"global"`` for tapes (see :mod:`~tapecoil.models.shell`).
     """
 
@@ -66,7 +70,12 @@ class ShellProblem:
         self.work_per_load = None  # UFL form: the external work of the loads per unit lambda
         self.point_forces: list[PointForce] = []
         self._motions: list[EdgeMotion] = []  # edges turned by the load parameter
-        self.wall_time = 0.0  # of the last solve [s]
+        # of the last solve, every attempt counted (the ones cut back, and a step that never
+        # converged): its wall time [s], Newton iterations, and the solver's timings
+        # (:attr:`SNESSolver.timings`); each step's own are in its StepRecord
+        self.wall_time = 0.0
+        self.newton_iterations = 0
+        self.timings: dict = {}
 
     # --- where things are
     def edge(self, name: str) -> int:
@@ -122,7 +131,15 @@ class ShellProblem:
 
     def symmetry_plane(self, edge: str, normal) -> None:
         """The edge lies on a plane of symmetry with unit ``normal`` (+-x, +-y or +-z): see
-        :func:`~tapecoil.models.supports.symmetry_plane`."""
+        :func:`~tapecoil.models.supports.symmetry_plane`.
+
+        The model is then part of the whole shell, and a load lying on the plane is shared
+        with the part cut away: give the model its share. A point force on the plane is halved
+        (P/2 for the whole's P; P/4 at a point on two planes, a quarter model), and so is a
+        force along an edge that lies on the plane; a load off the plane, or along an edge
+        that crosses it, is the whole's own (the cut edge carries half of its length). The
+        loads are stated per model, not per whole shell: nothing here halves them.
+        """
         self.bcs += symmetry_plane(self.model, self._facets(edge), normal, edge)
 
     def fix_point(self, point, directions: str = "xyz") -> None:
@@ -136,7 +153,11 @@ class ShellProblem:
         self.work_per_load = work if self.work_per_load is None else self.work_per_load + work
 
     def point_force(self, point, force) -> None:
-        """A force vector (fixed direction) at the node at ``point``, per unit lambda."""
+        """A force vector (fixed direction) at the node at ``point``, per unit lambda.
+
+        At a point on a plane of symmetry (:meth:`symmetry_plane`) the force is the model's
+        share of the whole shell's: half of it (a quarter on two planes), as for Sze's pinched
+        semicylinder modelled by its half, loaded by P/2."""
         self._require_node(point, "point_force")
         for i, component in enumerate(np.asarray(force, dtype=float)):
             if component != 0.0:
@@ -144,7 +165,10 @@ class ShellProblem:
                 self.point_forces.append(PointForce(dofs, PerUnitLoad(self.load, component)))
 
     def edge_force(self, edge: str, force) -> None:
-        """A force per unit (physical) length of the edge, fixed in direction, per unit lambda."""
+        """A force per unit (physical) length of the edge, fixed in direction, per unit lambda.
+
+        On an edge that lies on a plane of symmetry (:meth:`symmetry_plane`) it is the model's
+        share of the whole's line force there: half of it."""
         f = ufl.as_vector([float(c) for c in force])
         self._add_work(ufl.dot(f, self.model.u) * self._line_element(edge) * self.model.ds(self.edge(edge)))
 
@@ -186,6 +210,10 @@ class ShellProblem:
         converged step (``record.load`` is lambda). ``min_step`` defaults to 1e-6 ``load``;
         ``solver_config``: the ``[solver]`` settings (Newton tolerances, cut-back, PETSc options);
         ``options``: the problem's own PETSc options (without prefix), under those settings'.
+        Returns a :class:`~tapecoil.core.stepping.StepRecord` per converged step: its
+        ``iterations`` are the accepted attempt's, its ``total_iterations`` every attempt's.
+        Afterwards (also after a failure) :attr:`newton_iterations` and :attr:`wall_time` hold
+        the whole solve's, every attempt counted.
         """
         if not (np.isfinite(load) and load > 0):
             raise ValueError(f"solve: load {load} must be positive")
@@ -219,6 +247,8 @@ class ShellProblem:
             )
         finally:
             self.wall_time = time.perf_counter() - t0
+            self.timings = dict(solver.timings)
+            self.newton_iterations = int(solver.timings["iterations"])
             solver.destroy()
 
     def displacement_at(self, point) -> np.ndarray:

@@ -1,8 +1,10 @@
 """The shell's quadrature: the measures of the solve and the PSRI split of its energies.
 
 ``technology`` "full" integrates every energy with full quadrature; "psri" splits the membrane
-and shear energies into a fraction h^2/h_e^2 with full and the rest with reduced quadrature
-(the locking measures of :mod:`tapecoil.models.shell`'s docstring).
+and shear energies into a fraction min(h^2/h_e^2, 1) with full and the rest with reduced
+quadrature (the locking measures of :mod:`tapecoil.models.shell`'s docstring), h_e^2 the
+element's area measure on the 3D mid-surface at the quadrature point, |det dxi/dX| sqrt(det a0)
+(half that on triangles: the unit triangle's area).
 """
 
 from __future__ import annotations

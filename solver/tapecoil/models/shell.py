@@ -31,8 +31,13 @@ first vector along xi_1) and its A, B, D, H matrices (:mod:`~tapecoil.models.mat
 Locking. A thin shell (here R/h = 151 and elements 40 h long) locks in membrane and shear if
 those terms are integrated exactly with low-order elements. ``technology`` selects:
   - "psri" (default): partial selective reduced integration on Q2 elements. The membrane and
-    shear energies are split into a fraction h^2/h_e^2 integrated with full (3 x 3 Gauss) and
-    the rest with reduced (2 x 2) quadrature; bending is integrated fully. Every energy is
+    shear energies are split into a fraction alpha = min(h^2/h_e^2, 1) integrated with full
+    (3 x 3 Gauss) and the rest with reduced (2 x 2) quadrature; bending is integrated fully.
+    h_e is the element's size on the 3D mid-surface, the square root of its area measure at the
+    quadrature point: h_e^2 = |det dxi/dX| sqrt(det a0), with dxi/dX the Jacobian of the map
+    from the reference cell [0, 1]^2 to the parameter cell (half that for the unit triangle)
+    and sqrt(det a0) the area element of phi0: on a tape, whose map keeps lengths
+    (sqrt(det a0) = 1), an element l1 long and l2 wide has h_e^2 = l1 l2. Every energy is
     reported with exactly the quadrature the solve uses.
   - "full": everything with full quadrature; kept as the locking reference of the
     verification table.

@@ -47,10 +47,9 @@ class CoilingRun(SteppedRun):
 
     # the step grows after steps that converge in at most this many Newton iterations
     easy_iterations = 8
-    # the largest step [rad] of each predictor, unless coiling.max_step sets one. Benchmark,
-    # 36 rad on 2 ranks: with the shift, default mesh, 1.0 rad: 48 steps, 442 Newton iterations
-    # in all; 0.7 rad: 69 steps, 677. With the secant, 0.3 rad: default mesh 181 steps, 1,427;
-    # coarse mesh 270 steps, 4,266 (docs/coiling.md)
+    # the largest step [rad] of each predictor, unless coiling.max_step sets one: the shift
+    # predicts a turning hub's state well enough for long steps, fewer in all than shorter ones
+    # take; the secant needs short ones (the benchmark's counts: docs/coiling.md)
     max_steps: ClassVar[dict[str, float]] = {"shift": 1.0, "secant": 0.3}
 
     def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None, stop=None):

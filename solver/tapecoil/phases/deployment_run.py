@@ -52,8 +52,8 @@ class DeploymentRun(SteppedRun):
     (:class:`~tapecoil.phases.deployment_rows.DeploymentRows`).
     """
 
-    # the step grows after steps of at most this many Newton iterations: on the first 20 ms of
-    # the coarse benchmark 56 steps against 83 with 5
+    # the step grows after steps of at most this many Newton iterations: a stricter bound keeps
+    # the steps short where the deployment would take longer ones, for more steps in all
     easy_iterations = 8
 
     def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None, stop=None):

@@ -22,11 +22,10 @@ def choose_predictor(setting: str, element_length: float, r_hub: float) -> str:
     """The predictor of a run: the setting, or for "auto" the shift where the mesh resolves the coil.
 
     The shift interpolates the state along the tape, which needs elements short against the
-    turn they are wound into: measured on the benchmark (36 rad, 2 ranks, each predictor with
-    its own largest step), the default mesh (4 mm elements, 0.31 of the hub radius) took 442
-    Newton iterations with the shift against 1,427 with the secant; the coarse mesh (12.5 mm,
-    0.98 of the hub radius) 6,745 against 4,266. "auto" takes the shift up to elements of half
-    the hub radius.
+    turn they are wound into: on the benchmark (each predictor with its own largest step) the
+    default mesh, its elements a third of the hub radius, takes a fraction of the secant's
+    Newton iterations with the shift, and the coarse mesh, its elements about the hub radius,
+    more (docs/coiling.md). "auto" takes the shift up to elements of half the hub radius.
     """
     if setting != "auto":
         return setting

@@ -30,8 +30,8 @@ class TensionStudy:
             default mesh, so that the samples resolve the oscillation.
         section_window: winding angles from the root [rad] of the stretch of coil whose own
             sections are read at the end, away from the root's clamp and from the lift-off.
-            It must be steady coil: with 3 rad coiled and (1, 2) the energy per unit length
-            on r_c/R = 0.5 is 4.8 % off the steady value (docs/regimes.md). Empty: no such
+            It must be steady coil: a stretch too near the root or the lift-off reads an
+            energy per unit length off the steady value (docs/regimes.md). Empty: no such
             readings.
     """
 
@@ -69,9 +69,9 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
     :meth:`CoilingModel.edge_forces`) oscillates as nodes pass the lift-off
     point; its mean over the hub angles in ``study.window`` is the measured value. The contact
     bracket is the plain one: the smoothed bracket (``contact.smoothing``) holds the tape a few
-    smoothing widths off the coil, which lowers the measured tension by about 0.03 N (0.185 N
-    against 0.218 N at r_c/R = 0.9 with the default h/20; 0.2186 N with h/200 and 0.2190 N with
-    the plain bracket). Eq. 2.9 (tension-dominated coiling) is reported beside it.
+    smoothing widths off the coil, which lowers the measured tension, most in proportion where
+    the tension is small (r_c/R near 1); a narrower smoothing comes close to the plain bracket.
+    Eq. 2.9 (tension-dominated coiling) is reported beside it.
 
     At the end, the coil's own sections over ``study.section_window`` are read
     (:class:`~tapecoil.measures.coil_section.CoilSection`) against the flattened plate and its

@@ -62,34 +62,45 @@ def _spread(files: list[Path], n: int) -> list[Path]:
 
 def renders(directory: Path) -> list[Path]:
     """PNG renders and the GIF from the snapshots (needs PyVista and an X server or Xvfb)."""
-    from tapecoil.post.render import animate_snapshots, render_snapshots
+    from tapecoil.post.render import animate_snapshots, phase_views, render_snapshots, snapshot_grid
 
     config = load_config(directory / "config.toml")
     axis = HubFrame(config.hub.radius, config.tape.h, config.coiling.sense).axis_point
     figures = directory / "figures"
     figures.mkdir(exist_ok=True)
     out = []
-    sequences = []
+    sequences, views = [], []
     for phase, unit in (("coiling", "rad"), ("deployment", "s")):
         files, cells = _snapshots(directory, phase)
         if not files:
             continue
-        sequences.append((_spread(files, 120), cells, phase))
-        chosen = _spread(files, 4)
+        frames, chosen = _spread(files, 120), _spread(files, 4)
+        # one camera for the phase, from every frame the animation and the sequence show: they
+        # then share the hub's place and the scale
+        view = phase_views(
+            [snapshot_grid(cells, f, config.tape.R).bounds for f in sorted({*frames, *chosen})],
+            axis,
+            config.hub.radius,
+            config.tape.b,
+        )
+        sequences.append((frames, cells, phase))
+        views.append(view)
         times = [float(np.load(f)["t"]) for f in chosen]
         titles = [
             "flattening" if phase == "coiling" and t == 0 else f"{phase}: {t:.4g} {unit}" for t in times
         ]
         shape = (2, 2) if len(chosen) == 4 else (1, len(chosen))
         out.append(
-            render_snapshots(chosen, cells, figures / f"{phase}_sequence.png", config, axis, titles, shape)
+            render_snapshots(
+                chosen, cells, figures / f"{phase}_sequence.png", config, axis, titles, shape, views=view
+            )
         )
         if phase == "coiling":
             last = files[-1]
             title = f"stowed: hub angle {float(np.load(last)['t']):.4g} rad"
             out.append(render_snapshots([last], cells, figures / "stowed.png", config, axis, [title]))
     if sequences:
-        out.append(animate_snapshots(sequences, figures / "animation.gif", config, axis))
+        out.append(animate_snapshots(sequences, figures / "animation.gif", config, axis, views=views))
     return out
 
 

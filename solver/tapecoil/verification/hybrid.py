@@ -53,7 +53,7 @@ WINDOW = 0.1  # [m] of shell at the root
 TIP_ROTATION = 1e-4  # [rad] by beam theory: a linear response
 PENALTY = 1e3
 # [m] of shell at the root of the folded tape: room for the fold grown to pi and its transitions
-# (with 0.2 m the plateau comes out 6 % above the full shell's, the fold feeling the window's ends)
+# (a shorter window raises the plateau above the full shell's, the fold feeling its ends)
 FOLD_WINDOW = 0.3
 
 
