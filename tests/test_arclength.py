@@ -1,0 +1,155 @@
+"""Arc-length continuation and the stability of the states along a path (core/arclength.py,
+core/stability.py), against closed-form equilibrium paths, limit loads and buckling loads."""
+
+import math
+from typing import ClassVar
+
+import numpy as np
+import pytest
+from petsc4py import PETSc
+from scipy.optimize import minimize_scalar
+
+from tapecoil.core.arclength import ArcLength, ArcLengthError, ArcLengthSettings, PathSystem
+from tapecoil.core.stability import StabilityAnalysis
+
+# the von Mises truss: two bars of axial stiffness EA from the supports (+-a, 0) to the apex at
+# height h0, the apex loaded through a spring of stiffness k in series (loaded point v, apex w,
+# both downwards): P(w) = 2 EA (L0 - L)(h0 - w) / (L0 L), L = sqrt(a^2 + (h0 - w)^2), and
+# v = w + P(w) / k. With k below -min P'(w) the loaded point snaps back.
+EA, A_HALF, H0, K_SPRING = 1.0, 1.0, 0.2, 0.01
+
+
+def truss_force(w):
+    L0 = math.hypot(A_HALF, H0)
+    L = np.hypot(A_HALF, H0 - w)
+    return 2 * EA * (L0 - L) * (H0 - w) / (L0 * L)
+
+
+def truss_limit():
+    """The truss's limit load: the maximum of P(w), to round-off."""
+    best = minimize_scalar(
+        lambda w: -truss_force(w), bounds=(0.0, H0), method="bounded", options={"xatol": 1e-13}
+    )
+    return float(truss_force(best.x)), float(best.x)
+
+
+class Truss(PathSystem):
+    """The truss and its spring as a two-dof PathSystem (w, v), on one process."""
+
+    comm = PETSc.COMM_SELF
+    prefix = "test_truss_"
+    options: ClassVar[dict] = {}
+
+    def __init__(self, load_range=(-math.inf, math.inf)):
+        self.state = np.zeros(2)
+        self.load = 0.0
+        self.load_range = load_range
+        self.A = PETSc.Mat().createAIJ((2, 2), nnz=2, comm=PETSc.COMM_SELF)
+        self.A.setUp()
+
+    def vector(self):
+        return PETSc.Vec().createSeq(2, comm=PETSc.COMM_SELF)
+
+    def get_state(self, x):
+        x.array[:] = self.state
+
+    def set_state(self, x, load):
+        self.state[:] = x.array_r
+        self.load = load
+
+    def residual(self, b):
+        w, v = self.state
+        b.array[:] = [truss_force(w) - K_SPRING * (v - w), K_SPRING * (v - w) - self.load]
+
+    def jacobian(self):
+        w, _ = self.state
+        h = 1e-7
+        dP = (truss_force(w + h) - truss_force(w - h)) / (2 * h)
+        K = np.array([[dP + K_SPRING, -K_SPRING], [-K_SPRING, K_SPRING]])
+        self.A.setValues([0, 1], [0, 1], K.ravel())
+        self.A.assemble()
+        return self.A
+
+
+def test_truss_path_through_snap_through_and_snap_back():
+    """The path of the truss under its spring, from rest to the inverted truss: every state
+    on the closed-form path, the load over its maximum and back through zero to its minimum
+    (a limit point in load each), the loaded point turning back twice (snap-back)."""
+    truss = Truss()
+    P_max, _ = truss_limit()
+    path = ArcLength(truss, ArcLengthSettings(first_step=0.05 * P_max))
+    states = []
+    path.run(
+        0.0,
+        3 * P_max,
+        stop=lambda p: truss.state[0] > 2.2 * H0,
+        on_point=lambda p: states.append((p.load, *truss.state)),
+    )
+    load, w, v = np.array(states).T
+    # equilibrium of the apex and of the spring: Newton's tolerance is 1e-9 of the load, here
+    # never above 1.5 P_max
+    tol = 2e-9 * np.abs(load).max()
+    assert np.max(np.abs(load - truss_force(w))) < tol
+    assert np.max(np.abs(K_SPRING * (v - w) - load)) < tol
+    assert w[-1] > 2 * H0  # through to the inverted truss
+    dload, dv = np.diff(load), np.diff(v)
+    assert np.count_nonzero(np.diff(np.sign(dload))) == 2  # the load turns back twice
+    assert np.count_nonzero(np.diff(np.sign(dv))) == 2  # and so does the loaded point
+    assert load.min() < -0.9 * P_max  # the tension branch between the snaps
+    iterations = [p.iterations for p in path.points[1:]]
+    assert max(iterations) <= path.settings.max_iterations
+
+
+def test_truss_limit_points_and_eigenvalue_through_zero():
+    """The limit loads located along the path, +-P_max (the path is odd about w = h0), against
+    the closed-form maximum of P(w) to 1e-6, with the eigenvalue through zero there; the states
+    between them (the falling branch, load control) unstable, the others stable."""
+    truss = Truss()
+    P_max, _ = truss_limit()
+    path = ArcLength(
+        truss,
+        ArcLengthSettings(first_step=0.05 * P_max),
+        stability=StabilityAnalysis(1, prefix="test_truss_stab_"),
+    )
+    path.run(0.0, 3 * P_max, stop=lambda p: truss.state[0] > 2.2 * H0)
+    kinds = [c.kind for c in path.critical]
+    assert kinds == ["limit", "limit"]
+    top, bottom = path.critical
+    assert abs(top.load - P_max) < 1e-6 * P_max
+    assert abs(bottom.load + P_max) < 1e-6 * P_max
+    for c in path.critical:
+        assert abs(c.eigenvalue) < 1e-6 * abs(c.initial_eigenvalue)
+    # between the limit points the truss is unstable (one negative eigenvalue), outside stable
+    for p in path.points:
+        between = top.arc_length < p.arc_length < bottom.arc_length
+        assert p.negative == (1 if between else 0)
+
+
+def test_bad_input_is_refused_before_computing():
+    with pytest.raises(ValueError, match="first_step"):
+        ArcLengthSettings(first_step=0.0)
+    with pytest.raises(ValueError, match="min_step"):
+        ArcLengthSettings(first_step=1.0, min_step=-1.0)
+    truss = Truss(load_range=(-1.0, 1.0))
+    path = ArcLength(truss, ArcLengthSettings(first_step=0.1))
+    with pytest.raises(ValueError, match="outside the problem's loads"):
+        path.run(0.0, 2.0)
+    with pytest.raises(ValueError, match="must point"):
+        path.run(0.0, -0.5)
+    with pytest.raises(ValueError, match="first_arc_length"):
+        path.run(0.0, 0.5, first_arc_length=-1.0)
+    assert path.points == []  # nothing computed
+
+
+def test_unconverging_path_stops_with_the_last_state():
+    """A step that cannot converge (one Newton iteration allowed on a nonlinear path) is
+    halved down to the smallest step, then the run stops at the last converged state."""
+    truss = Truss()
+    P_max, _ = truss_limit()
+    settings = ArcLengthSettings(
+        first_step=0.5 * P_max, max_iterations=2, target_iterations=1, min_step=0.5, rtol=1e-14, atol=1e-30
+    )
+    path = ArcLength(truss, settings)
+    with pytest.raises(ArcLengthError) as error:
+        path.run(0.0, 2 * P_max)
+    assert error.value.load == path.points[-1].load
