@@ -153,3 +153,41 @@ def test_unconverging_path_stops_with_the_last_state():
     with pytest.raises(ArcLengthError) as error:
         path.run(0.0, 2 * P_max)
     assert error.value.load == path.points[-1].load
+
+
+def test_roof_snap_through():
+    """Sze's hinged roof, h = 12.7 (verify roof-snap-through, coarse): the first limit load
+    within 1 % of Sze's, the eigenvalue through zero there, the load's minimum passed too."""
+    from tapecoil.verification.roof import ROOF_MESHES, roof
+
+    result = roof(12.7, ROOF_MESHES["coarse"])
+    assert result.passed, [(c.name, c.computed, c.reference) for c in result.checks]
+
+
+def test_roof_snap_back():
+    """Sze's hinged roof, h = 6.35 (verify roof-snap-back, coarse): the limit load within 1 %,
+    and the deflection under the load turning back and forward again (snap-back)."""
+    from tapecoil.verification.roof import ROOF_MESHES, roof
+
+    result = roof(6.35, ROOF_MESHES["coarse"])
+    assert result.passed, [(c.name, c.computed, c.reference) for c in result.checks]
+
+
+@pytest.mark.mpi
+def test_roof_two_ranks_against_one():
+    """The roof's path on two ranks against the same on each rank alone: the same points and
+    the same limit loads, to the Newton tolerance."""
+    from mpi4py import MPI
+
+    from tapecoil.geometry.meshes import MeshResolution
+    from tapecoil.verification.roof import roof_curve
+
+    res = MeshResolution(4, 4)
+    both = roof_curve(12.7, res, MPI.COMM_WORLD, end_deflection=22.0, name="roof_mpi")
+    alone = roof_curve(12.7, res, MPI.COMM_SELF, end_deflection=22.0, name="roof_self")
+    assert len(both["curve"]) == len(alone["curve"])
+    a, b = np.array(both["curve"], dtype=float), np.array(alone["curve"], dtype=float)
+    assert np.allclose(a[:, :2], b[:, :2], rtol=1e-6, atol=1e-6 * np.abs(b[:, 0]).max())
+    assert [c[0] for c in both["critical"]] == [c[0] for c in alone["critical"]] == ["limit", "limit"]
+    for x, y in zip(both["critical"], alone["critical"], strict=True):
+        assert abs(x[1] - y[1]) < 1e-6 * abs(y[1])

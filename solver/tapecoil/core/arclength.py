@@ -631,4 +631,8 @@ class ArcLength:
             x.axpy(1.0, self._a)
 
     def destroy(self) -> None:
+        """Free the linear solver, and the system's own objects (a solver made for the path)."""
         self._ksp.destroy()
+        release = getattr(self.system, "destroy", None)
+        if release is not None:
+            release()
