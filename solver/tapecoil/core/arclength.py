@@ -476,6 +476,7 @@ class ArcLength:
         along=None,
         previous=None,
         first_arc_length: float | None = None,
+        until_critical: bool = False,
     ) -> list[PathPoint]:
         """Follow the path from the state in place at ``load_start`` until the load reaches
         ``load_end`` (the last point lands on it exactly), falls below ``load_min``, ``stop(point)``
@@ -485,7 +486,10 @@ class ArcLength:
         (vector, load part): the increment the path arrived with (orients the first tangent).
         ``first_arc_length``: the first step's arc length, instead of the one ``first_step``
         gives along the tangent (needed with ``along``: at a critical point the tangent is
-        singular).
+        singular). ``until_critical``: end on the first critical point located, accepted (and
+        committed) as the last point: a branch is switched to from there (a beam's rotations
+        are increments from the last accepted state, so the critical state must be accepted
+        before a run leaves it along its mode).
         Raises :class:`ArcLengthError` when no step converges, the state then the last converged.
         """
         lo, hi = self.system.load_range
@@ -582,6 +586,17 @@ class ArcLength:
                     turn = (critical.load - start.load) * (load - critical.load) < 0
                     critical.kind = "limit" if turn else "bifurcation"
                     self.critical.append(critical)
+                    if until_critical:
+                        # end on the critical state itself, accepted as the path's last point
+                        s.set_state(critical.state, critical.load)
+                        arc += critical.arc_length - point.arc_length
+                        point = PathPoint(critical.load, critical.arc_length, ds, its, halvings, 0.0)
+                        point.eigenvalues, point.negative = (critical.eigenvalue,), previous_point.negative
+                        load = critical.load
+                        landing = True
+                        s.get_state(x_after)
+                        Dx = x_after.copy()
+                        Dx.axpy(-1.0, start.x)
                 s.set_state(x_after, load)
             point.wall_time = time.perf_counter() - t0
             self.timings["steps"] += point.wall_time
