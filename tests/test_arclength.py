@@ -259,3 +259,27 @@ def test_euler_column_buckling_load_and_post_buckled_branch():
     assert len(checked) >= 5
     for P, d in checked:
         assert abs(P / P_cr / _elastica_load(d / L) - 1) < 1e-3, (P / P_cr, d)
+
+
+def test_solver_stability_of_a_pinched_roof():
+    """solver_stability on a plain load-stepped solve: the roof loaded to 90 % of its limit
+    load is stable, its eigenvalue nearest zero closer to zero than at rest (the stiffness
+    falls towards the limit point); a solve is judged without any continuation."""
+    from tapecoil.core.newton import SNESSolver
+    from tapecoil.core.stability import solver_stability
+    from tapecoil.geometry.meshes import MeshResolution
+    from tapecoil.verification.roof import SZE_PMAX, SZE_ROOF_LIMIT, roof_problem
+
+    problem = roof_problem(12.7, MeshResolution(4, 4), name="test_roof_stab")
+    F, J = problem.forms()
+    solver = SNESSolver(F, J, problem.model.q, problem.bcs, prefix="test_roof_stab_")
+    solver.point_forces.extend(problem.point_forces)
+    try:
+        at_rest = solver_stability(solver)
+        problem.set_load(0.9 * SZE_ROOF_LIMIT[12.7][0] * SZE_PMAX)
+        assert solver.solve().converged
+        loaded = solver_stability(solver)
+    finally:
+        solver.destroy()
+    assert at_rest.stable and loaded.stable
+    assert 0 < loaded.eigenvalues[0] < 0.5 * at_rest.eigenvalues[0]

@@ -217,11 +217,9 @@ class SolverSystem(PathSystem):
         return self.solver.compute_jacobian()
 
     def held_rows(self) -> np.ndarray:
-        from tapecoil.core.dofs import owned_constrained_dofs
+        from tapecoil.core.stability import held_rows
 
-        V = self.solver.q.function_space
-        lo, _ = self.solver.x.getOwnershipRange()
-        return np.unique(owned_constrained_dofs(V, self.solver.bcs)).astype(PETSc.IntType) + lo
+        return held_rows(self.solver)
 
     def commit(self, load: float) -> None:
         if self._commit is not None:

@@ -110,3 +110,21 @@ class StabilityAnalysis:
                 eps.destroy()
         finally:
             B.destroy()
+
+
+def solver_stability(solver, count: int = 3, *, prefix: str | None = None) -> StabilityResult:
+    """The stability of the state a :class:`~tapecoil.core.newton.SNESSolver` holds (its ``q``):
+    the eigenvalues nearest zero of its Jacobian there with its Dirichlet conditions applied,
+    and the count of negative ones (collective). Usable after any converged solve."""
+    A = solver.compute_jacobian()
+    analysis = StabilityAnalysis(count, prefix=prefix or f"{solver.prefix}stability_")
+    return analysis.analyse(A, held_rows(solver))
+
+
+def held_rows(solver) -> np.ndarray:
+    """Global indices of the owned dofs an SNESSolver's Dirichlet conditions hold."""
+    from tapecoil.core.dofs import owned_constrained_dofs
+
+    lo, _ = solver.x.getOwnershipRange()
+    held = owned_constrained_dofs(solver.q.function_space, solver.bcs)
+    return np.unique(held).astype(PETSc.IntType) + lo
