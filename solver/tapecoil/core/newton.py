@@ -225,6 +225,16 @@ class SNESSolver:
             self.snes.setJacobian(self._jacobian, J, self.A)
             self._operator = J
 
+    def compute_residual(self, b) -> None:
+        """The residual at the state ``q`` as it is into b (a driver of its own, arc-length
+        continuation, iterating outside the SNES)."""
+        self._residual(None, self.q.x.petsc_vec, b)
+
+    def compute_jacobian(self):
+        """The Jacobian at the state ``q`` as it is, assembled into this solver's matrix A."""
+        self._jacobian(None, self.q.x.petsc_vec, self.A, self.A)
+        return self.A
+
     def solve(self) -> SolveResult:
         """Solve from the current state ``q``; on failure ``q`` holds the last iterate."""
         self._use_operator()

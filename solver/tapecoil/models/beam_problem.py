@@ -287,6 +287,15 @@ class BeamProblem:
         residual = ufl.derivative(energy, model.q, model.dq)
         return residual, ufl.derivative(residual, model.q, ufl.TrialFunction(model.W))
 
+    def set_load(self, value: float) -> None:
+        """The load parameter, and the supports it turns, in place (a driver of its own, the
+        arc-length continuation, sets it so)."""
+        self._set_load(value)
+
+    def commit(self) -> None:
+        """Accept the state in place as a converged step: the rotations' reference moves on."""
+        self._commit()
+
     def _set_load(self, value: float) -> None:
         self.load.value = value
         for u_values, theta_values, point, centre, axis, place in self._turning:

@@ -86,6 +86,13 @@ def clamp(model: NaghdiShell, tag: int) -> EdgeMotion:
     return EdgeMotion(model, tag, axis=np.array([0.0, 1.0, 0.0]), axis_point=np.zeros(3))
 
 
+def hinge(model: NaghdiShell, tag: int) -> list:
+    """A hinged edge: zero displacement, the director free to turn (a shell's simple support
+    held in place along and across the edge)."""
+    _, bc = facet_condition(model, (0,), model.strip.facet_tags.find(tag))
+    return [bc]
+
+
 @dataclass
 class RigidSection:
     """An edge turned rigidly by a prescribed rotation while free to translate.

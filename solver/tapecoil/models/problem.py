@@ -30,7 +30,7 @@ from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
 from tapecoil.geometry.meshes import EDGE_NAMES, MeshResolution, create_strip_mesh
 from tapecoil.geometry.surfaces import Surface
-from tapecoil.models.edges import EdgeMotion, clamp
+from tapecoil.models.edges import EdgeMotion, clamp, hinge
 from tapecoil.models.shell import NaghdiShell, ShellMaterial
 from tapecoil.models.supports import fixed_point, symmetry_plane
 
@@ -105,6 +105,10 @@ class ShellProblem:
     def clamp(self, edge: str) -> None:
         """The edge held: zero displacement and rotation."""
         self.bcs += clamp(self.model, self.edge(edge)).bcs
+
+    def hinge(self, edge: str) -> None:
+        """The edge held in place, free to turn: zero displacement, the director free."""
+        self.bcs += hinge(self.model, self.edge(edge))
 
     def turn(self, edge: str, axis, axis_point) -> None:
         """The edge held, turned rigidly by the load parameter [rad] about the line through

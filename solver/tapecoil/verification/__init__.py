@@ -22,6 +22,8 @@ CASES = (
     "hybrid-coil",
     "hybrid-vibration",
     "hybrid-deploy",
+    "roof-snap-through",
+    "roof-snap-back",
 )
 
 

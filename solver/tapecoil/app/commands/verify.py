@@ -15,6 +15,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     import time
 
     config = load_config(args.config)
+    from tapecoil.core.arclength import ArcLengthError
     from tapecoil.core.stepping import ContinuationError
     from tapecoil.verification import CASES, not_applicable
     from tapecoil.verification.cases import run_case
@@ -33,7 +34,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         try:
             result = run_case(name, config, args.mesh)
-        except ContinuationError as exc:
+        except (ContinuationError, ArcLengthError) as exc:
             # a case whose solve fails is a failed case with its reason, not a traceback; the
             # other cases still run
             stopped[name] = str(exc)
