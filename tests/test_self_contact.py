@@ -85,7 +85,8 @@ def folded():
     share among the partner's nodes has a kink (that of the C0 surface's shape functions).
     """
     from tapecoil.contact.self_contact import SelfContact
-    from tapecoil.contact.term import SelfContactTerm
+    from tapecoil.contact.surface import ShellSurface
+    from tapecoil.contact.term import SelfContactTerm, block_numbering
     from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
     from tapecoil.geometry.surfaces import StripGeometry
     from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
@@ -103,8 +104,8 @@ def folded():
     u = np.vstack([folded_x, folded_y, folded_z]) - X
     model.q.x.array[nodes.u_dofs] = u.T
     penalty = 0.01 * E * h / (L / 40) ** 2
-    contact = SelfContact(model, nodes, h, penalty, 0.0, 2 * h, exclusion=0.03)
-    term = SelfContactTerm(contact, model.q, [])
+    contact = SelfContact(ShellSurface(model, nodes), h, penalty, 0.0, 2 * h, exclusion=0.03)
+    term = SelfContactTerm(contact, block_numbering(model.W, []))
     return model, nodes, contact, term, penalty, h
 
 
@@ -125,7 +126,7 @@ def test_folded_strip_pressure_is_uniform_and_forces_balance(folded):
     f = np.zeros((contact.n_nodes, 3))
     values = b.getArray()
     start, _ = b.getOwnershipRange()
-    owned_nodes = contact.u_dofs[contact.owned] - start
+    owned_nodes = contact.surface.u_dofs[contact.owned] - start
     f[contact.owned] = values[owned_nodes]
     total = MPI.COMM_WORLD.allreduce(f.sum(axis=0))
     scale = MPI.COMM_WORLD.allreduce(np.abs(f).sum())
@@ -192,10 +193,10 @@ def test_contact_jacobian_is_the_derivative_of_its_force(folded):
 def test_contact_coupling_transpose_is_the_adjoint(folded):
     """<K^T w, v> = <w, K v> for the applied part K, in random directions (what a trust region's
     steepest descent uses)."""
-    from tapecoil.contact.term import SelfContactTerm
+    from tapecoil.contact.term import SelfContactTerm, block_numbering
 
     model, _, contact, _, _, _ = folded
-    term = SelfContactTerm(contact, model.q, [])  # its own matrix pattern
+    term = SelfContactTerm(contact, block_numbering(model.W, []))  # its own matrix pattern
     A = contact_matrix(model, term)
     rng = np.random.default_rng(5)
     v, w = model.q.x.petsc_vec.duplicate(), model.q.x.petsc_vec.duplicate()
@@ -249,7 +250,8 @@ def _folded_energy_and_force(comm):
     (assembled and applied parts) on a smooth direction, for the folded strip on ``comm``."""
 
     from tapecoil.contact.self_contact import SelfContact
-    from tapecoil.contact.term import SelfContactTerm
+    from tapecoil.contact.surface import ShellSurface
+    from tapecoil.contact.term import SelfContactTerm, block_numbering
     from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
     from tapecoil.geometry.surfaces import StripGeometry
     from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
@@ -264,8 +266,10 @@ def _folded_energy_and_force(comm):
     u = np.vstack([np.where(s <= L / 2, s, L - s), nodes.reference[1], z]) - nodes.reference
     model.q.x.array[nodes.u_dofs] = u.T
     model.q.x.scatter_forward()
-    contact = SelfContact(model, nodes, h, 0.01 * E * h / (L / 40) ** 2, 0.05 * h, 2 * h, exclusion=0.03)
-    term = SelfContactTerm(contact, model.q, [])
+    contact = SelfContact(
+        ShellSurface(model, nodes), h, 0.01 * E * h / (L / 40) ** 2, 0.05 * h, 2 * h, exclusion=0.03
+    )
+    term = SelfContactTerm(contact, block_numbering(model.W, []))
     b_vec = model.q.x.petsc_vec.duplicate()
     b_vec.set(0.0)
     term.add_residual(b_vec)
@@ -284,7 +288,7 @@ def _folded_energy_and_force(comm):
     action_norm = action.norm()
     for obj in (b_vec, A, direction, action):
         obj.destroy()
-    return contact.energy(contact.pairs(model.q.x.array, contact.new_search())), norm, action_norm
+    return contact.energy(contact.pairs(contact.new_search())), norm, action_norm
 
 
 @pytest.mark.mpi
@@ -302,6 +306,7 @@ def test_a_flat_strip_does_not_touch_itself():
     once taken for a node sunk a whole thickness into it, and the coarse benchmark with 8
     elements across could not be flattened)."""
     from tapecoil.contact.self_contact import SelfContact
+    from tapecoil.contact.surface import ShellSurface
     from tapecoil.geometry.meshes import MeshResolution, create_strip_mesh
     from tapecoil.geometry.surfaces import StripGeometry
     from tapecoil.models.shell import NaghdiShell, Nodes, ShellMaterial
@@ -313,11 +318,11 @@ def test_a_flat_strip_does_not_touch_itself():
     model = NaghdiShell(strip, ShellMaterial(E, 0.3, h))
     nodes = Nodes(model)
     buffer = 2 * h
-    contact = SelfContact(model, nodes, h, 1e12, 0.05 * h, buffer, exclusion=4 * (h + buffer))
+    contact = SelfContact(ShellSurface(model, nodes), h, 1e12, 0.05 * h, buffer, exclusion=4 * (h + buffer))
     search = contact.new_search()
-    offered, _ = search.candidates(contact.positions(model.q.x.array), contact.owned)
+    offered, _ = search.candidates(contact.positions(), contact.owned)
     assert MPI.COMM_WORLD.allreduce(offered.size) > 0
-    pairs = contact.pairs(model.q.x.array, search)
+    pairs = contact.pairs(search)
     assert MPI.COMM_WORLD.allreduce(pairs.node.size) == 0
     assert contact.energy(pairs) == 0.0
 
@@ -327,12 +332,12 @@ def test_the_matrix_pattern_is_renewed_when_old_pairs_outnumber_the_live_ones(fo
     of the live pairs (counted here from the pairs themselves, over both ranks): the upper
     layer slid by two cells, so that every node has a new partner, twice more. No renewal
     while nothing has converged in between, nor while the pattern holds only live pairs."""
-    from tapecoil.contact.term import SelfContactTerm
+    from tapecoil.contact.term import SelfContactTerm, block_numbering
 
     model, nodes, contact, _, _, _ = folded
     comm = MPI.COMM_WORLD
     q0 = model.q.x.array.copy()
-    term = SelfContactTerm(contact, model.q, [])
+    term = SelfContactTerm(contact, block_numbering(model.W, []))
     assert term.begin() is False
     held, live = set(), set()
 
@@ -350,7 +355,7 @@ def test_the_matrix_pattern_is_renewed_when_old_pairs_outnumber_the_live_ones(fo
     for shift in (0.01, 0.02, 0.03):
         model.q.x.array[nodes.u_dofs[upper, 0]] = q0[nodes.u_dofs[upper, 0]] + shift
         model.q.x.scatter_forward()
-        contact.accept(model.q.x.array)
+        contact.accept()
         stale, alive = comm.allreduce(np.array([len(held - live), len(live)]), op=MPI.SUM)
         renewed.append(term.begin())
         assert renewed[-1] is bool(stale > alive)
@@ -359,7 +364,7 @@ def test_the_matrix_pattern_is_renewed_when_old_pairs_outnumber_the_live_ones(fo
         jacobian()
     model.q.x.array[:] = q0
     model.q.x.scatter_forward()
-    contact.accept(q0)
+    contact.accept()
     assert renewed == [False, True, False] and term.pattern_renewals == 1
 
 

@@ -526,3 +526,45 @@ void tc_apply_normals(int64_t P, const int64_t* cell, const int64_t* cells, cons
     }
   }
 }
+
+/* A pair block (P, 30, 30) on the positions of a pair's 10 nodes taken to their unknowns
+ * (P, 60, 60): each node's displacement u (x moves one to one) and rotation theta (dx = A dtheta,
+ * A = jacobian[node] (N, 3, 3)); rows and columns node by node, u then theta. */
+void tc_chain_blocks(int64_t P, const int64_t* nodes, const double* jacobian, const double* M, double* out)
+{
+  for (int64_t p = 0; p < P; ++p)
+  {
+    const int64_t* pn = nodes + 10 * p;
+    const double* Mp = M + 900 * p;
+    double* Op = out + 3600 * p;
+    for (int a = 0; a < 10; ++a)
+    {
+      const double* Aa = jacobian + 9 * pn[a];
+      for (int b = 0; b < 10; ++b)
+      {
+        const double* Ab = jacobian + 9 * pn[b];
+        double m[3][3], mA[3][3], Am[3][3], AmA[3][3];
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            m[i][j] = Mp[30 * (3 * a + i) + 3 * b + j];
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+          {
+            mA[i][j] = m[i][0] * Ab[j] + m[i][1] * Ab[3 + j] + m[i][2] * Ab[6 + j];
+            Am[i][j] = Aa[i] * m[0][j] + Aa[3 + i] * m[1][j] + Aa[6 + i] * m[2][j];
+          }
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            AmA[i][j] = Aa[i] * mA[0][j] + Aa[3 + i] * mA[1][j] + Aa[6 + i] * mA[2][j];
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+          {
+            Op[60 * (6 * a + i) + 6 * b + j] = m[i][j];
+            Op[60 * (6 * a + i) + 6 * b + 3 + j] = mA[i][j];
+            Op[60 * (6 * a + 3 + i) + 6 * b + j] = Am[i][j];
+            Op[60 * (6 * a + 3 + i) + 6 * b + 3 + j] = AmA[i][j];
+          }
+      }
+    }
+  }
+}

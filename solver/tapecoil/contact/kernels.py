@@ -33,6 +33,7 @@ void tc_apply_normals(int64_t P, const int64_t* cell, const int64_t* cells, cons
                       const double* S_in, int64_t n_nodes, const int64_t* slot_start,
                       const int64_t* slot_node, const double* D, int transpose, const double* v,
                       double* work, double* out);
+void tc_chain_blocks(int64_t P, const int64_t* nodes, const double* jacobian, const double* M, double* out);
 """
 
 
@@ -211,6 +212,24 @@ def apply_normals(cell, cells, N, sensitivity, neighbourhood, D, values, transpo
         int(transpose),
         a.doubles(_doubles(values)),
         a.doubles(np.empty((n_nodes, 3))),
+        a.doubles(out),
+    )
+    return out
+
+
+def chain_blocks(nodes: np.ndarray, jacobian: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """Pair blocks on the positions of each pair's 10 nodes ``nodes`` (P, 10), ``matrix``
+    (P, 30, 30), taken to the nodes' displacements and rotations (P, 60, 60), node by node, with
+    dx/dtheta = ``jacobian`` (N, 3, 3) (``kernels.c``)."""
+    k = library()
+    a = _Arguments(k)
+    P = len(nodes)
+    out = np.empty((P, 60, 60))
+    k.lib.tc_chain_blocks(
+        P,
+        a.indices(_indices(nodes)),
+        a.doubles(_doubles(jacobian)),
+        a.doubles(_doubles(matrix)),
         a.doubles(out),
     )
     return out

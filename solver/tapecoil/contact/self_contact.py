@@ -1,4 +1,4 @@
-"""Penalty contact of a shell's mid-surface with itself, from the current geometry of both sides.
+"""Penalty contact of a surface with itself, from the current geometry of both sides.
 
 Two parts of a shell of thickness h touch when their mid-surfaces come within h of each other
 (the faces h/2 off the mid-surfaces meet). Every node A of the mid-surface is a contact point;
@@ -33,11 +33,16 @@ assembled matrix preconditions (:meth:`~tapecoil.contact.term.SelfContactTerm.ap
 The force along the smoothed normal is not the gradient of an energy: the operator is not
 symmetric.
 
-Parallel: the mid-surface is small (nodes and cells of a 2D mesh), so every rank gathers all
-node positions at each evaluation (:class:`GatheredSurface`) and searches for its own nodes'
-partners; the forces and the matrix entries go to whichever ranks own the dofs
-(PETSc's stash). The search is a Verlet list (:class:`~tapecoil.contact.projection.CandidateSearch`):
-rebuilt only when a node has moved by more than half the buffer, and exact in between.
+The surface is a shell's mid-surface, or any :class:`~tapecoil.contact.surface.ContactSurface`
+(a hybrid's shell window joined to the strip its beam sweeps); the pairs are computed on its
+nodes' positions, and the term (:mod:`tapecoil.contact.term`) maps their forces and matrices to
+the unknowns those nodes follow.
+
+Parallel: the surface is small (nodes and cells of a 2D mesh), so every rank gathers all node
+positions at each evaluation and searches for its own nodes' partners; the forces and the
+matrix entries go to whichever ranks own the dofs (PETSc's stash). The search is a Verlet list
+(:class:`~tapecoil.contact.projection.CandidateSearch`): rebuilt only when a node has moved by
+more than half the buffer, and exact in between.
 """
 
 from __future__ import annotations
@@ -45,11 +50,8 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-import dolfinx
 import numpy as np
-import ufl
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from tapecoil.contact import kernels
 from tapecoil.contact.linearisation import NodalNormals
@@ -74,9 +76,9 @@ class ContactPairs:
     ``node`` (P,), ``cell`` (P,): the contact node and its partner cell; ``ref`` (P, 2),
     ``held`` (P, 2), ``N`` (P, 9): the closest point's reference coordinates, which of them are
     held on an edge, and the shape functions there; ``side`` (P,) and ``gap`` (P,);
-    ``direction`` (P, 3) the unit normal the gap is counted along; ``dofs`` (P, 30): global
-    u-dofs of the node and of the partner cell's nodes; ``B`` (P, 30): the force's direction on
-    them (the force is ``force`` B, ``force`` (P,) = dE/dg, ``stiffness`` (P,) = d2E/dg2);
+    ``direction`` (P, 3) the unit normal the gap is counted along; ``B`` (P, 30): the force's
+    direction on the node's and the partner cell's nodes' positions (the force is ``force`` B,
+    ``force`` (P,) = dE/dg, ``stiffness`` (P,) = d2E/dg2);
     ``positions`` (N, 3) and ``nodal`` (N, 3): the surface's nodes and their unit normals at
     this state, ``normal_data`` what the normals' derivatives need; ``energy``: this rank's
     penalty energy [J]. The force's derivative is computed when a Jacobian asks for it
@@ -91,7 +93,6 @@ class ContactPairs:
     side: np.ndarray
     gap: np.ndarray
     direction: np.ndarray
-    dofs: np.ndarray
     B: np.ndarray
     force: np.ndarray
     stiffness: np.ndarray
@@ -105,63 +106,6 @@ class ContactPairs:
 def inside_cell(ref: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
     """Whether reference points (n, 2) lie strictly inside their cells (off every edge)."""
     return np.all((ref > tolerance) & (ref < 1 - tolerance), axis=1)
-
-
-class GatheredSurface:
-    """The whole mid-surface on every rank: its nodes (in global node order) and Q2 cells.
-
-    The surface of a 2D mesh is small, so every rank holds all of it: the reference positions,
-    the material coordinates, the u-dofs (global), the nodes' shares of the reference area and
-    the cells (global node numbers), gathered once; the positions at each state are gathered by
-    :meth:`positions` (one Allgatherv of 3 doubles per node).
-    """
-
-    def __init__(self, model, nodes):
-        self.nodes = nodes
-        self.comm = comm = model.mesh.comm
-        imap = nodes.space.dofmap.index_map
-        self.n_owned = n_owned = imap.size_local
-        local_nodes = np.arange(n_owned + imap.num_ghosts, dtype=np.int32)
-        global_node = imap.local_to_global(local_nodes).astype(np.int64)
-        self.n_nodes = imap.size_global
-        W_map, bs = model.W.dofmap.index_map, model.W.dofmap.index_map_bs
-        u_local = nodes.u_dofs[:n_owned].ravel()
-        u_global = (W_map.local_to_global((u_local // bs).astype(np.int32)) * bs + u_local % bs).reshape(
-            -1, 3
-        )
-        test = ufl.TestFunction(nodes.space)
-        area = dolfinx.fem.assemble_vector(dolfinx.fem.form(test * model.jacobian * model.dx))
-        area.scatter_reverse(dolfinx.la.InsertMode.add)
-
-        self.owned = global_node[:n_owned]
-        self._counts = np.array(comm.allgather(n_owned), dtype=np.int64)
-        self._order = np.concatenate(comm.allgather(self.owned))
-        self.reference = self.gather(nodes.reference[:, :n_owned].T.copy())
-        self.material = self.gather(nodes.xi[:, :n_owned].T.copy())
-        self.u_dofs = self.gather(u_global.astype(PETSc.IntType))
-        self.weights = self.gather(area.array[:n_owned].copy())
-        n_cells = model.mesh.topology.index_map(model.mesh.topology.dim).size_local
-        self.cells = np.vstack(comm.allgather(global_node[nodes.space.dofmap.list[:n_cells]]))
-
-    def gather(self, values: np.ndarray) -> np.ndarray:
-        """Per-node values of this rank's owned nodes, for every node, on every rank (collective)."""
-        out = np.empty((self.n_nodes, *values.shape[1:]), dtype=values.dtype)
-        out[self._order] = np.concatenate(self.comm.allgather(values))
-        return out
-
-    def gather_u(self, q: np.ndarray) -> np.ndarray:
-        """The u components (N, 3) of every node of the W-dof array ``q`` (its owned part at
-        least), on every rank (collective)."""
-        u = q[self.nodes.u_dofs[: self.n_owned]]
-        out = np.empty((self.n_nodes, 3))
-        received = np.empty(3 * self.n_nodes)
-        self.comm.Allgatherv(np.ascontiguousarray(u.ravel()), [received, 3 * self._counts])
-        out[self._order] = received.reshape(-1, 3)
-        return out
-
-    def positions(self, q: np.ndarray) -> np.ndarray:
-        """Mid-surface positions (N, 3) of every node at the W-dof array ``q`` (collective)."""
-        return self.gather_u(q) + self.reference
 
 
 def nearest_on_each_side(node, cell, side, distance, inside, memory=None) -> np.ndarray:
@@ -179,27 +123,25 @@ def nearest_on_each_side(node, cell, side, distance, inside, memory=None) -> np.
 
 
 class SelfContact:
-    """Self-contact of a :class:`~tapecoil.models.shell.NaghdiShell` (see the module docstring).
+    """Self-contact of a surface (see the module docstring).
 
-    ``nodes``: the shell's :class:`~tapecoil.models.shell.Nodes`; ``thickness`` h [m];
-    ``penalty`` k [N/m^3]; ``smoothing`` delta [m]; ``buffer`` the search's Verlet buffer [m];
-    ``exclusion`` [m]: parts of the surface closer than this to a node in the reference
-    configuration are its own neighbourhood. ``side_hint(node, cell)``: optional, +1 or -1 per
+    ``surface``: a :class:`~tapecoil.contact.surface.ContactSurface` (a shell's mid-surface:
+    :class:`~tapecoil.contact.surface.ShellSurface`); ``thickness`` h [m]; ``penalty`` k
+    [N/m^3]; ``smoothing`` delta [m]; ``buffer`` the search's Verlet buffer [m];
+    ``exclusion`` [m]: parts of the surface closer than this to a node in the material
+    coordinates are its own neighbourhood. ``side_hint(node, cell)``: optional, +1 or -1 per
     candidate pair, the side of the cell (along the surface's orientation) the node belongs on
     where the converged state cannot tell (see :meth:`_sides`).
     """
 
-    def __init__(self, model, nodes, thickness, penalty, smoothing, buffer, exclusion, side_hint=None):
-        self.model, self.nodes = model, nodes
-        self.comm = model.mesh.comm
+    def __init__(self, surface, thickness, penalty, smoothing, buffer, exclusion, side_hint=None):
+        self.surface = surface
+        self.comm = surface.comm
         self.h, self.penalty, self.delta = thickness, penalty, smoothing
         # pairs beyond this gap carry no force (the smoothed bracket is below 1e-5 delta there)
         self.cutoff = 12.0 * smoothing
-        surface = GatheredSurface(model, nodes)
-        self.surface = surface
-        self.n_owned, self.n_nodes, self.owned = surface.n_owned, surface.n_nodes, surface.owned
-        self.reference, self.material = surface.reference, surface.material
-        self.u_dofs, self.weights, self.cells = surface.u_dofs, surface.weights, surface.cells
+        self.n_nodes, self.owned = surface.n_nodes, surface.owned
+        self.material, self.weights, self.cells = surface.material, surface.weights, surface.cells
         self.buffer, self.exclusion, self.side_hint = buffer, exclusion, side_hint
         self.reach = thickness + self.cutoff
         self.normal_field = NodalNormals(self.cells, self.n_nodes)
@@ -212,21 +154,23 @@ class SelfContact:
             "coupling": 0.0,
         }
         self._reference_version = 0
-        self.accept(model.q.x.array)
+        self.accept()
 
     def new_search(self) -> CandidateSearch:
         return CandidateSearch(self.cells, self.material, self.exclusion, self.reach, self.buffer)
 
-    def positions(self, q: np.ndarray) -> np.ndarray:
-        """Mid-surface positions (N, 3) of every node of the surface, on every rank (collective)."""
+    def positions(self, state: list[np.ndarray] | None = None) -> np.ndarray:
+        """Positions (N, 3) of every node of the surface at ``state`` (the blocks' local arrays;
+        default the current one), on every rank (collective)."""
         t0 = time.perf_counter()
-        out = self.surface.positions(q)
+        out = self.surface.positions(state)
         self.timings["gather"] += time.perf_counter() - t0
         return out
 
-    def accept(self, q: np.ndarray) -> None:
-        """Take the state ``q`` as the converged one the sides are read from (collective)."""
-        self.reference_positions = self.positions(q)
+    def accept(self, state: list[np.ndarray] | None = None) -> None:
+        """Take ``state`` (default the current one) as the converged one the sides are read from
+        (collective)."""
+        self.reference_positions = self.positions(state)
         self._reference_version += 1
 
     def _sides(self, node: np.ndarray, cell: np.ndarray, search: CandidateSearch) -> dict:
@@ -256,21 +200,20 @@ class SelfContact:
 
     def pairs(
         self,
-        q: np.ndarray,
         search: CandidateSearch,
-        dofs: np.ndarray | None = None,
         memory: np.ndarray | None = None,
+        state: list[np.ndarray] | None = None,
     ) -> ContactPairs:
-        """This rank's contact pairs at the W-dof array ``q`` (collective: gathers positions).
+        """This rank's contact pairs at ``state`` (the blocks' local arrays; default the current
+        one; collective: gathers positions).
 
-        ``dofs`` (N, 3): the u-dofs to assemble into (constrained ones -1); default all.
         ``memory`` (2 N,): the partner cell each node had on each side (-1: none), kept while
         the node's closest point stays inside it and updated here; without it the closest
         cell is taken. Where two cells are (nearly) equally close (a node over the edge
         between them), the closest by round-off changes from one Newton iteration to the next
         and the force with it, and Newton cycles; a kept partner does not.
         """
-        x = self.positions(q)
+        x = self.positions(state)
         t0 = time.perf_counter()
         node, cell = search.candidates(x, self.owned)
         t1 = time.perf_counter()
@@ -314,9 +257,6 @@ class SelfContact:
         self.timings["projection"] += t2 - t1
 
         B = kernels.pair_blocks(node, cell, x, self.cells, nodal, ref, held, side)
-        u_dofs = self.u_dofs if dofs is None else dofs
-        partner = self.cells[cell]
-        pair_dofs = np.concatenate([u_dofs[node], u_dofs[partner].reshape(-1, 27)], axis=1)
         p, dp, d2p = smoothed_bracket(gap, self.delta)
         kw = self.penalty * self.weights[node]
         return ContactPairs(
@@ -328,7 +268,6 @@ class SelfContact:
             side=side,
             gap=gap,
             direction=side[:, None] * found["smooth"][first],
-            dofs=pair_dofs,
             B=B,
             force=kw * p * dp,
             stiffness=kw * (dp**2 + p * d2p),
@@ -372,13 +311,13 @@ class SelfContact:
         """The penalty energy of the whole surface [J] from every rank's ``pairs`` (collective)."""
         return self.comm.allreduce(pairs.energy, op=MPI.SUM)
 
-    def add_force(self, force, pairs: ContactPairs) -> None:
-        """Add the contact force dE/dq of ``pairs`` to the dolfinx Function ``force`` (collective)."""
-        vec = force.x.petsc_vec
-        vec.setValues(pairs.dofs.ravel(), (pairs.force[:, None] * pairs.B).ravel(), addv=PETSc.InsertMode.ADD)
-        vec.assemblyBegin()
-        vec.assemblyEnd()
-        vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    def nodal_forces(self, pairs: ContactPairs) -> np.ndarray:
+        """The contact force dE/dx (N, 3) on every node of the surface from this rank's ``pairs``
+        (this rank's share: sum over the ranks for the whole; rank-local)."""
+        out = np.zeros((self.n_nodes, 3))
+        rows = np.concatenate([pairs.node[:, None], self.cells[pairs.cell]], axis=1)
+        np.add.at(out, rows.ravel(), (pairs.force[:, None] * pairs.B).reshape(-1, 3))
+        return out
 
     def max_penetration(self, pairs: ContactPairs) -> float:
         """The deepest penetration -g of any part of the surface into another [m], >= 0 (collective)."""

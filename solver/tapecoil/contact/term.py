@@ -1,22 +1,83 @@
-"""The self-contact's force and Newton matrix in a :class:`~tapecoil.core.newton.SNESSolver`.
+"""The self-contact's force and Newton matrix in a Newton solver of one or several blocks.
 
 The solver calls the term at every residual and Jacobian (its ``terms``); the contact couples
 dofs of distant parts of the mesh, so the matrix's nonzero pattern is widened when new pairs
-appear (:meth:`SelfContactTerm.add_jacobian`).
+appear (:meth:`SelfContactTerm.add_jacobian`). Where the solver's unknowns sit is a
+:class:`Numbering`: one block's dofs as they are (:func:`block_numbering`, a shell's solver), or
+several blocks' in a joint vector (a coupled solver's). A surface whose nodes are carried by
+rotations (a beam's strip) has its pairs' forces and matrices taken to the rotations by the
+chain rule: dx = du + A dtheta, A = dx/dtheta, and Newton's matrix gains the force times
+d2x/dtheta2 (:meth:`~tapecoil.contact.surface.ContactSurface.rotation_hessian`).
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from tapecoil.contact import kernels
-from tapecoil.contact.projection import CandidateSearch
 from tapecoil.contact.self_contact import ContactPairs, SelfContact
 from tapecoil.core.dofs import owned_constrained_dofs
+
+
+@dataclass
+class Numbering:
+    """Where a contact surface's blocks of unknowns sit in a solver (collective to build).
+
+    ``rows[k](dofs)``: the solver's global rows of block k's global dofs ``dofs``;
+    ``constrained[k]``: block k's globally numbered dofs that Dirichlet conditions hold (they
+    take no contact entries: the solver sets their rows), ``constrained_local[k]`` the same as
+    this rank's owned local indices; ``owned(vector)``: each block's owned values of a solver
+    vector, in the block's own layout.
+    """
+
+    rows: list[Callable[[np.ndarray], np.ndarray]]
+    constrained: list[np.ndarray]
+    constrained_local: list[np.ndarray]
+    owned: Callable[[PETSc.Vec], list[np.ndarray]]
+
+    def free(self, vector: PETSc.Vec) -> list[np.ndarray]:
+        """Each block's owned values of ``vector`` (copies), those of constrained dofs zeroed."""
+        out = [v.copy() for v in self.owned(vector)]
+        for values, local in zip(out, self.constrained_local, strict=True):
+            values[local] = 0.0
+        return out
+
+    def map(self, block: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+        """Solver rows (same shape as ``dofs``) of the dofs ``dofs`` of the blocks ``block`` (one
+        per row of ``dofs``); -1 where constrained or absent (a negative dof)."""
+        out = np.full(dofs.shape, -1, dtype=np.int64)
+        for k, (to_rows, fixed) in enumerate(zip(self.rows, self.constrained, strict=True)):
+            mine = (block == k)[:, None] & (dofs >= 0)
+            if mine.any():
+                free = mine & ~np.isin(dofs, fixed)
+                out[free] = to_rows(dofs[free])
+        return out
+
+
+def constrained_global(V, bcs) -> np.ndarray:
+    """The dofs of V (global numbering) that the Dirichlet conditions ``bcs`` hold, on every rank
+    (collective)."""
+    index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+    owned = owned_constrained_dofs(V, bcs)
+    glob = index_map.local_to_global((owned // bs).astype(np.int32)) * bs + owned % bs
+    return np.unique(np.concatenate(V.mesh.comm.allgather(glob.astype(np.int64))))
+
+
+def block_numbering(V, bcs) -> Numbering:
+    """One block's unknowns as they are (a solver of the Function space V alone, e.g. a
+    :class:`~tapecoil.core.newton.SNESSolver`) with its Dirichlet conditions ``bcs``."""
+    return Numbering(
+        [lambda dofs: dofs],
+        [constrained_global(V, bcs)],
+        [owned_constrained_dofs(V, bcs)],
+        lambda v: [v.getArray(readonly=True)],
+    )
 
 
 class PairsAtState:
@@ -34,7 +95,8 @@ class PairsAtState:
         self._q = self._version = self._pairs = None
 
     def get(self, q: np.ndarray, compute) -> ContactPairs:
-        """The pairs at the W-dof array ``q``: kept ones, or ``compute()`` (collective)."""
+        """The pairs at the state ``q`` (the blocks' arrays one after the other): kept ones, or
+        ``compute()`` (collective)."""
         same = (
             self._q is not None
             and self._version == self.contact._reference_version
@@ -83,22 +145,24 @@ def add_blocks(A: PETSc.Mat, dofs: np.ndarray, blocks: np.ndarray) -> None:
 
 
 class SelfContactTerm:
-    """The self-contact's force and matrix in a :class:`~tapecoil.core.newton.SNESSolver`.
+    """The self-contact's force and matrix in a Newton solver (its ``terms``).
 
-    ``q``: the solver's state; ``bcs``: its Dirichlet conditions (their dofs take no contact
-    entries: the solver sets those rows). The force enters as ``weight`` f(q) and, with
-    ``previous = (weight_old, q_old)``, plus weight_old f(q_old): the force average of
+    ``numbering``: where the surface's unknowns sit in the solver (:class:`Numbering`). The force
+    enters as ``weight`` f(x) and, with ``previous = (weight_old, state_old)`` (``state_old``: the
+    blocks' Functions at the old state), plus weight_old f(x_old): the force average of
     generalized-alpha.
     """
 
-    def __init__(self, contact: SelfContact, q, bcs, weight: float = 1.0, previous=None):
-        self.contact, self.q = contact, q
-        comm = contact.comm
-        W_map, bs = q.function_space.dofmap.index_map, q.function_space.dofmap.index_map_bs
-        owned = owned_constrained_dofs(q.function_space, bcs)
-        glob = W_map.local_to_global((owned // bs).astype(np.int32)) * bs + owned % bs
-        fixed = np.unique(np.concatenate(comm.allgather(glob)))
-        self.dofs = np.where(np.isin(contact.u_dofs, fixed), -1, contact.u_dofs).astype(PETSc.IntType)
+    def __init__(self, contact: SelfContact, numbering: Numbering, weight: float = 1.0, previous=None):
+        self.contact, self.numbering = contact, numbering
+        surface = contact.surface
+        unknowns = surface.unknowns()
+        self.u_rows = numbering.map(unknowns.block, unknowns.u).astype(PETSc.IntType)
+        self.theta_rows = numbering.map(unknowns.block, unknowns.theta).astype(PETSc.IntType)
+        # the rows a node's position moves: its displacement's, and its rotation's if carried
+        self.node_rows = (
+            np.concatenate([self.u_rows, self.theta_rows], axis=1) if surface.carried else self.u_rows
+        )
         self.weight, self.previous = weight, previous
         self.search, self.search_previous = contact.new_search(), contact.new_search()
         self._kept = {"current": PairsAtState(contact), "previous": PairsAtState(contact)}
@@ -109,9 +173,17 @@ class SelfContactTerm:
         self._live: set[int] = set()
         self.pattern_extensions = self.pattern_renewals = 0
 
-    def _pairs(self, name: str, q: np.ndarray, search: CandidateSearch) -> ContactPairs:
+    def _state(self, name: str) -> list[np.ndarray] | None:
+        if name == "current":
+            return None
+        return [f.x.array for f in self.previous[1]]
+
+    def _pairs(self, name: str) -> ContactPairs:
+        state = self._state(name)
+        key = np.concatenate(self.contact.surface.state() if state is None else state)
+        search = self.search if name == "current" else self.search_previous
         memory = self._memory if name == "current" else None
-        return self._kept[name].get(q, lambda: self.contact.pairs(q, search, self.dofs, memory))
+        return self._kept[name].get(key, lambda: self.contact.pairs(search, memory, state))
 
     def begin(self) -> bool:
         """Before a solve: the partners kept are those of the last converged state, or none.
@@ -120,7 +192,7 @@ class SelfContactTerm:
         a failed solve, from the same converged state) keeps none and starts from the closest
         cells, as a run restarted from that state does: coarse-mesh deployments that stopped
         with every cut-back failing went on when restarted there, and go on unstopped so.
-        Returns True (on every rank) when the matrix should start again from the shell's
+        Returns True (on every rank) when the matrix should start again from the solver's own
         pattern: the pairs in it that the last Jacobian no longer had outnumber those it had
         (collective). A coil's material runs through the ploy region and each node meets
         partner after partner; kept, their couplings tripled the matrix's nonzeros by 36 rad
@@ -142,20 +214,46 @@ class SelfContactTerm:
         return renew
 
     def current(self) -> ContactPairs:
-        return self._pairs("current", self.q.x.array, self.search)
+        return self._pairs("current")
+
+    def _pair_nodes(self, pairs: ContactPairs) -> np.ndarray:
+        """The node and the partner cell's nodes of each pair (P, 10)."""
+        return np.concatenate([pairs.node[:, None], self.contact.cells[pairs.cell]], axis=1)
+
+    def _pair_rows(self, pairs: ContactPairs) -> np.ndarray:
+        """The solver rows of each pair's nodes (P, 10 x 3, or 10 x 6 with rotations)."""
+        return self.node_rows[self._pair_nodes(pairs)].reshape(len(pairs.node), 10 * self.node_rows.shape[1])
+
+    def _to_unknowns(self, pairs: ContactPairs, values: np.ndarray, jacobian) -> np.ndarray:
+        """Pair values on the nodes' positions (P, 30) as values on their unknowns: as they are,
+        or, on a surface carried by rotations, each node's (v, A^T v) (P, 60)."""
+        if jacobian is None:
+            return values
+        P = len(values)
+        v = values.reshape(P, 10, 3)
+        turned = np.einsum("pnij,pni->pnj", jacobian[self._pair_nodes(pairs)], v)
+        return np.concatenate([v, turned], axis=2).reshape(P, 60)
+
+    def _jacobian_at(self, name: str):
+        """dx/dtheta (N, 3, 3) of the surface at the current or the old state (None: no rotation
+        carries it)."""
+        surface = self.contact.surface
+        return surface.unknowns(self._state(name)).jacobian if surface.carried else None
 
     def add_residual(self, b: PETSc.Vec) -> None:
         """Add the contact force to the residual vector ``b`` (collective)."""
-        parts = [(self.weight, self.current())]
-        if self.previous is not None:
-            weight_old, q_old = self.previous
-            parts.append((weight_old, self._pairs("previous", q_old.x.array, self.search_previous)))
+        names = ["current"] + (["previous"] if self.previous is not None else [])
+        parts = [(self.weight if name == "current" else self.previous[0], name) for name in names]
         t0 = time.perf_counter()
-        for weight, pairs in parts:
-            values = ((weight * pairs.force)[:, None] * pairs.B).ravel()
-            dofs = pairs.dofs.ravel()
-            free = dofs >= 0  # a vector, unlike a matrix, takes no negative index
-            b.setValues(dofs[free], values[free], addv=PETSc.InsertMode.ADD)
+        for weight, name in parts:
+            pairs = self._pairs(name)
+            values = self._to_unknowns(
+                pairs, (weight * pairs.force)[:, None] * pairs.B, self._jacobian_at(name)
+            )
+            rows = self._pair_rows(pairs).ravel()
+            values = values.ravel()
+            free = rows >= 0  # a vector, unlike a matrix, takes no negative index
+            b.setValues(rows[free], values[free], addv=PETSc.InsertMode.ADD)
         b.assemblyBegin()
         b.assemblyEnd()
         self.contact.timings["assembly"] += time.perf_counter() - t0
@@ -163,24 +261,36 @@ class SelfContactTerm:
     def add_jacobian(self, A: PETSc.Mat) -> bool:
         """Add the contact matrix to ``A`` (collective); True if A's pattern had to be widened.
 
-        A takes each pair's force differentiated on its own 30 dofs; its derivative through the
-        nodal normals, on the dofs of the nodes around the partner cell, is kept for
+        A takes each pair's force differentiated on its own nodes' unknowns; its derivative
+        through the nodal normals, on the nodes around the partner cell, is kept for
         :meth:`apply_coupling`.
         """
         pairs = self.current()
         matrix, sensitivity = self.contact.jacobian_blocks(pairs)
-        self._coupling = (pairs, sensitivity, self.contact.normal_derivatives(pairs))
+        jacobian = self._jacobian_at("current")
+        self._coupling = (pairs, sensitivity, self.contact.normal_derivatives(pairs), jacobian)
         t0 = time.perf_counter()
         keys = pairs.node * len(self.contact.cells) + pairs.cell
         listed = keys.tolist()
         self._live = set(listed)
         new = np.array([k not in self._pattern for k in listed], dtype=bool)
+        rows = self._pair_rows(pairs)
         A.assemble()
         widen = self.contact.comm.allreduce(int(new.sum()), op=MPI.SUM) > 0
         if widen:
-            self._widen(A, pairs.dofs[new])
+            self._widen(A, rows[new])
             self._pattern.update(keys[new].tolist())
-        add_blocks(A, pairs.dofs, self.weight * matrix)
+        if jacobian is None:
+            add_blocks(A, rows, self.weight * matrix)
+        else:
+            blocks = kernels.chain_blocks(self._pair_nodes(pairs), jacobian, matrix)
+            add_blocks(A, rows, self.weight * blocks)
+            # the force on each carried point times its position's second derivative in the
+            # rotation: on the rotation's own dofs, within the solver's pattern
+            forces = self.contact.nodal_forces(pairs)
+            hessian = self.contact.surface.rotation_hessian(forces)
+            carried = np.flatnonzero(np.abs(forces).sum(axis=1) > 0)
+            add_blocks(A, self.theta_rows[carried], self.weight * hessian[carried])
         self.contact.timings["assembly"] += time.perf_counter() - t0
         return widen
 
@@ -188,23 +298,25 @@ class SelfContactTerm:
         """y += K x (or K^T x), K the part of the Jacobian at the last :meth:`add_jacobian` that
         goes through the nodal normals (collective). Constrained dofs take no part."""
         t0 = time.perf_counter()
-        pairs, sensitivity, D = self._coupling
+        pairs, sensitivity, D, jacobian = self._coupling
         contact = self.contact
-        values = contact.surface.gather_u(x.getArray(readonly=True))
-        values[self.dofs < 0] = 0.0
+        # the constrained dofs' values do not move the surface (their rows are the solver's)
+        values = contact.surface.values(self.numbering.free(x))
         neighbourhood = contact.normal_field.neighbourhood
         if not transpose:
             out = kernels.apply_normals(
                 pairs.cell, contact.cells, pairs.N, sensitivity, neighbourhood, D, values, False
             )
-            rows = pairs.dofs.ravel()
+            out = self._to_unknowns(pairs, out, jacobian)
+            rows = self._pair_rows(pairs).ravel()
         else:
-            cells = contact.cells[pairs.cell]
-            on_rows = np.concatenate([values[pairs.node], values[cells].reshape(-1, 27)], axis=1)
+            on_rows = values[self._pair_nodes(pairs)].reshape(len(pairs.node), 30)
             out = kernels.apply_normals(
                 pairs.cell, contact.cells, pairs.N, sensitivity, neighbourhood, D, on_rows, True
             )
-            rows = self.dofs.ravel()
+            if jacobian is not None:
+                out = np.concatenate([out, np.einsum("nij,ni->nj", jacobian, out)], axis=1)
+            rows = self.node_rows.ravel()
         out = self.weight * out.ravel()
         free = (rows >= 0) & (out != 0.0)
         y.setValues(rows[free], out[free], addv=PETSc.InsertMode.ADD)

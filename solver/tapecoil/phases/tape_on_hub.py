@@ -18,6 +18,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.contact.surface import ShellSurface
 from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
@@ -75,7 +76,7 @@ class TapeOnHub:
         if cc.turns == "surface":
             buffer = cc.search_margin * tp.h
             self.turns = TurnContact(
-                model, self.contact.nodes, self.frame, tp.h, self.penalty, smoothing, buffer
+                ShellSurface(model, self.contact.nodes), self.frame, tp.h, self.penalty, smoothing, buffer
             )
         # strain + contact energy as forms (the turns' real contact is assembled on its own:
         # add_self_contact_force)
@@ -162,7 +163,7 @@ class TapeOnHub:
 
     def contact_terms(self, q, bcs, weight: float = 1.0, previous=None) -> list:
         """The solver terms of the turns' real contact (:meth:`TurnContact.term`), if any."""
-        return [] if self.turns is None else [self.turns.term(q, bcs, weight, previous)]
+        return [] if self.turns is None else [self.turns.shell_term(q, bcs, weight, previous)]
 
     # -- checkpoint -------------------------------------------------------------------------
     def checkpoint_functions(self) -> dict:
