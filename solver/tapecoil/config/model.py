@@ -90,11 +90,6 @@ def hybrid_need(config) -> str | None:
             "the hybrid coils in that sense only",
         ),
         (
-            config.contact.turns == "spiral",
-            "contact.turns = 'spiral'",
-            "its beams rest on the spiral of turns",
-        ),
-        (
             config.mesh.grading == 1.0,
             "mesh.grading = 1",
             "its shell and beams share their nodes along the tape",

@@ -13,8 +13,6 @@ d2x/dtheta2 (:meth:`~tapecoil.contact.surface.ContactSurface.rotation_hessian`).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from mpi4py import MPI
@@ -22,62 +20,9 @@ from petsc4py import PETSc
 
 from tapecoil.contact import kernels
 from tapecoil.contact.self_contact import ContactPairs, SelfContact
-from tapecoil.core.dofs import owned_constrained_dofs
+from tapecoil.core.numbering import Numbering, block_numbering
 
-
-@dataclass
-class Numbering:
-    """Where a contact surface's blocks of unknowns sit in a solver (collective to build).
-
-    ``rows[k](dofs)``: the solver's global rows of block k's global dofs ``dofs``;
-    ``constrained[k]``: block k's globally numbered dofs that Dirichlet conditions hold (they
-    take no contact entries: the solver sets their rows), ``constrained_local[k]`` the same as
-    this rank's owned local indices; ``owned(vector)``: each block's owned values of a solver
-    vector, in the block's own layout.
-    """
-
-    rows: list[Callable[[np.ndarray], np.ndarray]]
-    constrained: list[np.ndarray]
-    constrained_local: list[np.ndarray]
-    owned: Callable[[PETSc.Vec], list[np.ndarray]]
-
-    def free(self, vector: PETSc.Vec) -> list[np.ndarray]:
-        """Each block's owned values of ``vector`` (copies), those of constrained dofs zeroed."""
-        out = [v.copy() for v in self.owned(vector)]
-        for values, local in zip(out, self.constrained_local, strict=True):
-            values[local] = 0.0
-        return out
-
-    def map(self, block: np.ndarray, dofs: np.ndarray) -> np.ndarray:
-        """Solver rows (same shape as ``dofs``) of the dofs ``dofs`` of the blocks ``block`` (one
-        per row of ``dofs``); -1 where constrained or absent (a negative dof)."""
-        out = np.full(dofs.shape, -1, dtype=np.int64)
-        for k, (to_rows, fixed) in enumerate(zip(self.rows, self.constrained, strict=True)):
-            mine = (block == k)[:, None] & (dofs >= 0)
-            if mine.any():
-                free = mine & ~np.isin(dofs, fixed)
-                out[free] = to_rows(dofs[free])
-        return out
-
-
-def constrained_global(V, bcs) -> np.ndarray:
-    """The dofs of V (global numbering) that the Dirichlet conditions ``bcs`` hold, on every rank
-    (collective)."""
-    index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
-    owned = owned_constrained_dofs(V, bcs)
-    glob = index_map.local_to_global((owned // bs).astype(np.int32)) * bs + owned % bs
-    return np.unique(np.concatenate(V.mesh.comm.allgather(glob.astype(np.int64))))
-
-
-def block_numbering(V, bcs) -> Numbering:
-    """One block's unknowns as they are (a solver of the Function space V alone, e.g. a
-    :class:`~tapecoil.core.newton.SNESSolver`) with its Dirichlet conditions ``bcs``."""
-    return Numbering(
-        [lambda dofs: dofs],
-        [constrained_global(V, bcs)],
-        [owned_constrained_dofs(V, bcs)],
-        lambda v: [v.getArray(readonly=True)],
-    )
+__all__ = ["SOLVER_OPTIONS", "Numbering", "PairsAtState", "SelfContactTerm", "add_blocks", "block_numbering"]
 
 
 class PairsAtState:

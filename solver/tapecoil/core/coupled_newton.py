@@ -33,7 +33,8 @@ from petsc4py import PETSc
 from tapecoil.core import compat
 from tapecoil.core.convergence import ResidualTest
 from tapecoil.core.dofs import global_size, owned_constrained_dofs, owned_size
-from tapecoil.core.newton import SolveResult, assemble_residual, create_snes, run_snes
+from tapecoil.core.newton import JacobianOperator, SolveResult, assemble_residual, create_snes, run_snes
+from tapecoil.core.numbering import Numbering, block_row_starts, joint_numbering
 from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix
 
 __all__ = ["Block", "CoupledSNESSolver", "CouplingGroup", "DofCoupling", "JointState"]
@@ -285,6 +286,11 @@ class CoupledSNESSolver:
 
         self.prefix = prefix
         self.options = {**DEFAULT_PETSC_OPTIONS, **(options or {})}
+        # terms assembled beyond the forms (contact between the two blocks' surfaces), as
+        # SNESSolver's: add_residual(r), add_jacobian(J) on the joint vector and matrix, begin()
+        # before a solve, and an applied part through apply_coupling (see numbering())
+        self.terms: list = []
+        self._operator = None
         self.snes = create_snes(
             comm,
             prefix,
@@ -343,10 +349,8 @@ class CoupledSNESSolver:
     def _rank_starts(self, block: int) -> tuple[np.ndarray, np.ndarray]:
         """For every rank, its first row of the block ``block`` (0 or 1) in the joint matrix and
         its first dof in that block's own global numbering (collective)."""
-        V = self.blocks[block].q.function_space
-        first = self._row_start + (owned_size(self.blocks[0].q.function_space) if block else 0)
-        block_start = V.dofmap.index_map_bs * V.dofmap.index_map.local_range[0]
-        return np.array(self.comm.allgather(first)), np.array(self.comm.allgather(block_start))
+        firsts, starts = block_row_starts([blk.q.function_space for blk in self.blocks], self.comm)
+        return firsts[block], starts[block]
 
     def _joint_indices(self, second: np.ndarray) -> np.ndarray:
         """Global rows of the joint matrix of dofs of the second block given by their global
@@ -354,6 +358,11 @@ class CoupledSNESSolver:
         firsts, starts = self._rank_starts(1)
         owner = np.searchsorted(starts, second, side="right") - 1
         return (firsts[owner] + second - starts[owner]).astype(PETSc.IntType)
+
+    def numbering(self) -> Numbering:
+        """Where each block's unknowns sit in the joint vector and matrix, with each block's
+        Dirichlet conditions (:class:`~tapecoil.core.numbering.Numbering`; collective)."""
+        return joint_numbering([(blk.q.function_space, blk.bcs) for blk in self.blocks], self.comm)
 
     def _set_local_numbering(self) -> list:
         """Give the joint matrix a local numbering, each block's local dofs (owned, then ghosts,
@@ -415,6 +424,8 @@ class CoupledSNESSolver:
             sub = r.getSubVector(self.index_sets[k])
             sub.array[:] = b.array_r
             r.restoreSubVector(self.index_sets[k], sub)
+        for term in self.terms:
+            term.add_residual(r)
         self.timings["residual"] += time.perf_counter() - t0
 
     def free_residuals(self) -> list[np.ndarray]:
@@ -453,13 +464,39 @@ class CoupledSNESSolver:
             P.setValues(rows, self._coupled, values, addv=add)
             P.setValues(self._coupled, rows, np.ascontiguousarray(values.T), addv=add)
         P.assemble()
+        widened = [term.add_jacobian(P) for term in self.terms]
+        P.assemble()
         if J.handle != P.handle:
             J.assemble()
         self.convergence.update_floor(P, x)
+        if any(widened):
+            # a widened pattern replaces the matrix's storage, which the factorisation does
+            # not notice (as SNESSolver's)
+            self.snes.getKSP().getPC().reset()
         self.timings["jacobian"] += time.perf_counter() - t0
+
+    def _use_operator(self) -> None:
+        if self._operator is None and any(hasattr(term, "apply_coupling") for term in self.terms):
+            operator = JacobianOperator(lambda: self.J, lambda: self.terms)
+            J = PETSc.Mat().createPython(self.J.getSizes(), operator, comm=self.J.getComm())
+            J.setUp()
+            self.snes.setJacobian(self._jacobian, J, self.J)
+            self._operator = J
+
+    def _renew_matrix(self) -> None:
+        """Start the joint matrix again from the blocks' and the ties' pattern (collective)."""
+        old = self.J
+        self.J, _ = self._joint_matrix()
+        self._local_sets = self._set_local_numbering()
+        self.snes.setJacobian(self._jacobian, self.J if self._operator is None else self._operator, self.J)
+        self.snes.getKSP().getPC().reset()
+        old.destroy()
 
     def solve(self) -> SolveResult:
         """Solve from the current states; on failure they hold the last iterate."""
+        self._use_operator()
+        if any([term.begin() for term in self.terms]):  # a list: every term's begin() runs
+            self._renew_matrix()
         self._write_states(self.x)
         result = run_snes(self.snes, self.x, self.prefix, self.options, self.timings)
         if result.converged:
@@ -467,5 +504,6 @@ class CoupledSNESSolver:
         return result
 
     def destroy(self) -> None:
-        for obj in (self.snes, self.J, self.x, self.r, *self.b, *self._local_sets):
-            obj.destroy()
+        for obj in (self.snes, self.J, self.x, self.r, *self.b, *self._local_sets, self._operator):
+            if obj is not None:
+                obj.destroy()

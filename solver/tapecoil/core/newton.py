@@ -220,7 +220,8 @@ class SNESSolver:
 
     def _use_operator(self) -> None:
         if self._operator is None and any(hasattr(term, "apply_coupling") for term in self.terms):
-            J = PETSc.Mat().createPython(self.A.getSizes(), JacobianOperator(self), comm=self.A.getComm())
+            operator = JacobianOperator(lambda: self.A, lambda: self.terms)
+            J = PETSc.Mat().createPython(self.A.getSizes(), operator, comm=self.A.getComm())
             J.setUp()
             self.snes.setJacobian(self._jacobian, J, self.A)
             self._operator = J
@@ -300,21 +301,23 @@ class SNESSolver:
 
 
 class JacobianOperator:
-    """Newton's operator A + sum of the terms' applied parts, as a PETSc python matrix's context."""
+    """Newton's operator A + sum of the terms' applied parts, as a PETSc python matrix's context:
+    ``matrix()`` the assembled matrix A (a solver's, which it may replace), ``terms()`` the
+    solver's terms."""
 
-    def __init__(self, solver: SNESSolver):
-        self.solver = solver
+    def __init__(self, matrix, terms):
+        self.matrix, self.terms = matrix, terms
 
     def _applied(self) -> list:
-        return [term for term in self.solver.terms if hasattr(term, "apply_coupling")]
+        return [term for term in self.terms() if hasattr(term, "apply_coupling")]
 
     def mult(self, _mat, x, y) -> None:
-        self.solver.A.mult(x, y)
+        self.matrix().mult(x, y)
         for term in self._applied():
             term.apply_coupling(x, y)
 
     def multTranspose(self, _mat, x, y) -> None:
         """(A + K)^T x: for a trust region's steepest descent (``snes_type newtontr``)."""
-        self.solver.A.multTranspose(x, y)
+        self.matrix().multTranspose(x, y)
         for term in self._applied():
             term.apply_coupling(x, y, transpose=True)

@@ -30,38 +30,54 @@ def rotation_matrices(vectors: np.ndarray) -> np.ndarray:
     return np.eye(3) + f1[:, None, None] * K + f2[:, None, None] * K @ K
 
 
-# terms of the series of the Rodrigues coefficients in s = |theta|^2: entire functions, whose
-# series converge for every s; enough terms for machine precision up to |theta| = 5 rad
-_TERMS = 24
-_LARGEST_ANGLE = 5.0
+# below this s = |theta|^2 the Rodrigues coefficients come from their series in s (entire
+# functions: enough terms for machine precision up to s = 1), above it in closed form (which
+# would cancel as s -> 0)
+_TERMS = 16
+_SERIES_BELOW = 1.0
 
 
 def _series(s: np.ndarray, first: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """sum_n (-s)^n / (2n + first)! and its first two derivatives in s, for arrays s."""
     value, d1, d2 = np.zeros_like(s), np.zeros_like(s), np.zeros_like(s)
     factorial = float(math.factorial(first))
-    power = np.ones_like(s)  # s^n
     for n in range(_TERMS):
         if n > 0:
             factorial *= (2 * n + first - 1) * (2 * n + first)
         sign = -1.0 if n % 2 else 1.0
-        value += sign * power / factorial
+        value += sign * s**n / factorial
         if n >= 1:
             d1 += sign * n * s ** (n - 1) / factorial
         if n >= 2:
             d2 += sign * n * (n - 1) * s ** (n - 2) / factorial
-        power = power * s
     return value, d1, d2
 
 
+def _closed(s: np.ndarray):
+    """cos a, sin a / a, (1 - cos a) / a^2 (a^2 = s > 0) and their first two derivatives in s."""
+    a = np.sqrt(s)
+    gam, alp = np.cos(a), np.sin(a) / a
+    bet = (1.0 - gam) / s
+    gam1, alp1 = -alp / 2, (gam - alp) / (2 * s)
+    bet1 = (alp - 2 * bet) / (2 * s)
+    gam2 = -alp1 / 2
+    alp2 = (gam1 - alp1) / (2 * s) - alp1 / s
+    bet2 = (alp1 - 2 * bet1) / (2 * s) - bet1 / s
+    return (gam, gam1, gam2), (alp, alp1, alp2), (bet, bet1, bet2)
+
+
 def _coefficients(theta: np.ndarray):
+    """s = |theta|^2 and the Rodrigues coefficients cos a, sin a / a, (1 - cos a) / a^2 with
+    their first two derivatives in s, each a triple of arrays."""
     s = np.einsum("ni,ni->n", theta, theta)
-    if np.any(s > _LARGEST_ANGLE**2):
-        raise ValueError(
-            f"a rotation increment of {np.sqrt(s.max()):.3g} rad: beyond {_LARGEST_ANGLE:g} rad "
-            "the step is not an increment"
-        )
-    return s, _series(s, 0), _series(s, 1), _series(s, 2)  # cos, sin a / a, (1 - cos a) / a^2
+    small = s < _SERIES_BELOW
+    series = [_series(np.where(small, s, 0.0), first) for first in (0, 1, 2)]
+    closed = _closed(np.where(small, 1.0, s))
+    out = tuple(
+        tuple(np.where(small, x, y) for x, y in zip(sx, cx, strict=True))
+        for sx, cx in zip(series, closed, strict=True)
+    )
+    return (s, *out)
 
 
 def rotated(theta: np.ndarray, w: np.ndarray) -> np.ndarray:

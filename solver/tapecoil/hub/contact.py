@@ -64,6 +64,17 @@ def spiral_obstacle(psi, r_hub: float, h: float, max_turns: int, ramp_width: flo
     return r_hub + h * sum(step((psi - 2 * math.pi * k) / ramp_width + 1.0) for k in range(1, max_turns + 1))
 
 
+def root_fairing(psi, r_hub: float, h: float, ramp_width: float):
+    """The hub's radius with its fairing behind the root clamp, at winding angle ``psi`` (UFL):
+    r_hub, rising smoothly to r_hub + h over the last ``ramp_width`` [rad] of the first turn,
+    where the turn passes over the root's end (:meth:`CoilContact.fairing_height`, read by
+    winding angle: behind the root's end by 2 pi - psi); r_hub again beyond, where the turn
+    lies on the root and its own turns carry it."""
+    behind = 2 * math.pi - psi
+    on = ufl.And(ufl.gt(behind, 1e-6 * ramp_width), ufl.lt(behind, ramp_width))
+    return r_hub + h * ufl.conditional(on, 1.0, 0.0) * smoothstep_ufl(1.0 - behind / ramp_width)
+
+
 def default_penalty(E: float, h: float, element_length: float) -> float:
     """Penalty stiffness per unit area [N/m^3]: element contact stiffness E h / 100."""
     return 0.01 * E * h / element_length**2

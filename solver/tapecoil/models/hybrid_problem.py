@@ -39,7 +39,11 @@ class HybridProblem:
     the shape given (``[(edge, node, section), ...]``, edge ``"xi1_min"`` or ``"xi1_max"``,
     section ``"arc"`` or ``"flat"``: a window of shell between two pieces of beam), with penalty
     factor ``penalty`` (:class:`RigidSectionTie`) and the wall's in-plane modulus ``modulus``
-    [Pa]. ``name``: the PETSc options prefix is ``name + "_"``."""
+    [Pa]. ``name``: the PETSc options prefix is ``name + "_"``. ``contact``: a contact between
+    the parts' surfaces (anything with ``term(numbering, weight, previous)``, its solver term
+    in the joint solve, and ``accept()``, after each converged step: a
+    :class:`~tapecoil.phases.turn_contact.TurnContact` on the shell's and the beam's joined
+    surface), or None."""
 
     def __init__(
         self,
@@ -51,12 +55,14 @@ class HybridProblem:
         modulus: float,
         penalty: float = 1e3,
         name: str = "hybrid",
+        contact=None,
     ):
         if (beam_end is None) == (ties is None):
             raise ValueError("hybrid: give either beam_end or ties")
         if ties is None:
             ties = [("xi1_max", beam_end, "arc")]
         self.shell, self.beam, self.name = shell, beam, name
+        self.contact = contact
         (x0, x1), _ = shell.surface.xi_range
         first, last = shell.strip.resolution.element_lengths(x1 - x0)
         element_lengths = {"xi1_min": first, "xi1_max": last}
@@ -117,6 +123,13 @@ class HybridProblem:
             prefix = f"value:{p}:"
             part.set_state_values({k[len(prefix) :]: v for k, v in tables.items() if k.startswith(prefix)})
         self._set_load(self.beam.committed_load)
+        self.state_changed()
+
+    def state_changed(self) -> None:
+        """The state was set from outside a solve (carried over, restored, settled): the parts'
+        contact reads it as the converged one it measures the next steps from (collective)."""
+        if self.contact is not None:
+            self.contact.accept()
 
     def flatten(self, edge: str) -> None:
         """Flatten the flat tie at ``edge`` with the load parameter: its section goes from the arc
@@ -145,22 +158,32 @@ class HybridProblem:
             tie.commit()  # reads its end's rotation increment before the beam sets it to zero
         self.beam._commit()
         self.shell.commit(self.beam.committed_load)
+        if self.contact is not None:
+            self.contact.accept()
 
     def _predict(self, load_from: float, load_to: float) -> None:
         self.beam._predict(load_from, load_to)
         self.shell.predict(load_from, load_to)
 
     def _solver(
-        self, F_s, J_s, settings: SolverConfig, options: dict | None, beam_forms: tuple | None = None
+        self,
+        F_s,
+        J_s,
+        settings: SolverConfig,
+        options: dict | None,
+        beam_forms: tuple | None = None,
+        contact_levels=(1.0, None),
     ) -> CoupledSNESSolver:
         """The joint Newton solver of the shell's forms ``F_s``, ``J_s`` and the beam's (its
-        energy's, or ``beam_forms``: its equation of motion, say)."""
+        energy's, or ``beam_forms``: its equation of motion, say), with the parts' contact if
+        any: its force at ``contact_levels`` = (weight, (weight_old, the old states' Functions)
+        or None), generalized-alpha's average in time."""
         beam_forms = beam_forms or self.beam.forms()
         blocks = [
             Block(F, J, part.model.q, part.bcs, part.point_forces, part.model.rounding_scale())
             for part, (F, J) in ((self.shell, (F_s, J_s)), (self.beam, beam_forms))
         ]
-        return CoupledSNESSolver(
+        solver = CoupledSNESSolver(
             blocks,
             self.coupling,
             prefix=f"{self.name}_",
@@ -169,6 +192,9 @@ class HybridProblem:
             atol=settings.atol,
             max_it=settings.max_newton,
         )
+        if self.contact is not None:
+            solver.terms.append(self.contact.term(solver.numbering(), *contact_levels))
+        return solver
 
     def solve(
         self,

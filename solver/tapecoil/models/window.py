@@ -368,3 +368,4 @@ def carry_over(old, new) -> None:
             tie.copy_shape(kept)
         else:
             tie.keep_shape()
+    new.state_changed()

@@ -102,6 +102,7 @@ def settle(hybrid, choose, config) -> dict:
     )
     change = model.q.x.array - placed.x.array
     moved = float(np.linalg.norm(change[nodes.u_dofs], axis=1).max(initial=0.0))
+    hybrid.state_changed()
     return {
         "strain_energy_placed": before,
         "strain_energy_settled": global_scalar(strain, shell.comm),
@@ -160,6 +161,7 @@ def settle_withdrawn(hybrid, stretch: tuple[float, float], config) -> dict:
     change = model.q.x.array[model.node_u_dofs] - fitted.x.array[model.node_u_dofs]
     moved = float(np.linalg.norm(change, axis=1).max(initial=0.0))
     model.commit()
+    hybrid.state_changed()
     return {
         "strain_energy_fitted": before,
         "strain_energy_settled": model.strain_energy(),

@@ -32,14 +32,17 @@ import math
 import time
 from dataclasses import dataclass
 
+import dolfinx
 import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.contact.surface import BeamStripSurface, JoinedSurface, ShellSurface
+from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import MeshResolution
-from tapecoil.hub.contact import default_penalty, spiral_obstacle
+from tapecoil.hub.contact import default_penalty, root_fairing, spiral_obstacle
 from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_station
 from tapecoil.models.beam_section import BeamSection
@@ -51,6 +54,7 @@ from tapecoil.phases.coiling_run import CoilingRun
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.predictors import choose_predictor, wound_length
 from tapecoil.phases.root_loads import HybridRootLoads
+from tapecoil.phases.turn_contact import TurnContact
 from tapecoil.phases.window_on_hub import ContactSettings, WindowOnHub
 
 __all__ = ["HybridCoiling", "WindowSettings"]
@@ -134,8 +138,6 @@ class HybridCoiling:
         tp, cc = config.tape, config.contact
         if config.coiling.sense != "opposite":
             raise ValueError("the hybrid coils in the opposite sense only: coiling.sense must be 'opposite'")
-        if cc.turns != "spiral":
-            raise ValueError("the hybrid's beam rests on the spiral of turns: contact.turns must be 'spiral'")
         resolution = MeshResolution.from_config(config.mesh, tp.L)
         if resolution.grading != 1.0:
             raise ValueError("the hybrid's shell and beam share their nodes: mesh.grading must be 1")
@@ -151,11 +153,14 @@ class HybridCoiling:
         # the full shell's largest steps for its predictor, unless coiling.max_step sets one
         self.max_step = self.max_step or config.coiling.max_step or CoilingRun.max_steps[self.predictor]
         self.frame = HubFrame(config.hub.radius, tp.h, config.coiling.sense)
-        # the joint Jacobian is a Hessian (the energies, the ties', dead loads, penalty contact)
-        # and the boundary conditions keep it symmetric: MUMPS LDL^T, as the full shell's
-        # coiling; [solver] and [coiling] petsc_options override it
+        # on the spiral obstacle the joint Jacobian is a Hessian (the energies, the ties', dead
+        # loads, penalty contact) and the boundary conditions keep it symmetric: MUMPS LDL^T, as
+        # the full shell's coiling; the turns' real contact pushes along the partner's smoothed
+        # normal, which is not an energy's gradient: LU, its applied part in GMRES
+        # (tapecoil.contact.term); [solver] and [coiling] petsc_options override either
+        symmetric = {"pc_type": "cholesky"} if cc.turns == "spiral" else dict(SOLVER_OPTIONS)
         self.petsc_options = {
-            "pc_type": "cholesky",
+            **symmetric,
             **config.solver.petsc_options,
             **config.coiling.petsc_options,
         }
@@ -168,6 +173,8 @@ class HybridCoiling:
             math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1,
             max(2 * self.element / config.hub.radius, 0.3),
             cc.smoothing * tp.h,
+            cc.turns,
+            cc.search_margin * tp.h,
         )
         self.angle = 0.0
         self.pull = config.coiling.tension  # [N] at the free end (a payout may set its own)
@@ -225,11 +232,21 @@ class HybridCoiling:
             # the root on the hub: the flattened strip's line lies on the hub's top generator
             beam.clamp((0.0, 0.0, self.centroid), turning_about=(frame.axis_point, frame.axis), at=(0, 0, 0))
             c = self.contact
+            if c.turns == "spiral":
+
+                def obstacle(psi):
+                    return spiral_obstacle(psi, frame.radius, tp.h, c.max_turns, c.ramp_width) + tp.h / 2
+
+            else:  # the hub and the fairing behind the root; the turns' contact is the surfaces'
+
+                def obstacle(psi):
+                    return root_fairing(psi, frame.radius, tp.h, c.ramp_width) + tp.h / 2
+
             beam.winding_contact(
                 frame.axis_point,
                 frame.axis,
                 -frame.axis_point,
-                lambda psi: spiral_obstacle(psi, frame.radius, tp.h, c.max_turns, c.ramp_width) + tp.h / 2,
+                obstacle,
                 c.penalty * tp.b,
                 c.smoothing,
                 # across its width, the flattened strip rests as the shell's does: a line
@@ -255,7 +272,32 @@ class HybridCoiling:
             if self.predictor == "shift":
                 # the straight part beyond the window runs towards the hub as the tape winds on
                 beam.slide(end - 1e-9 * tp.L, lambda a, b: wound_length(shell.contact, a, b))
-        return HybridProblem(shell, beam, ties=ties, modulus=tp.E, penalty=self.window.tie_penalty, name=name)
+        return HybridProblem(
+            shell,
+            beam,
+            ties=ties,
+            modulus=tp.E,
+            penalty=self.window.tie_penalty,
+            name=name,
+            contact=self._turn_contact(shell, beam, start),
+        )
+
+    def _turn_contact(self, shell, beam, start: float) -> TurnContact | None:
+        """The turns' real contact of a hybrid with its window from ``start`` [m]: the window's
+        shell and the strip of the flattened beam behind it, one surface (None on the spiral
+        obstacle, whose contact is in each part's energy)."""
+        c, tp = self.contact, self.config.tape
+        if c.turns == "spiral":
+            return None
+        parts = [ShellSurface(shell.model, shell.contact.nodes, block=0)]
+        mesh = beam.mesh
+        owned = np.arange(mesh.topology.index_map(1).size_local, dtype=np.int32)
+        middle = dolfinx.mesh.compute_midpoints(mesh, 1, owned)[:, 0]
+        flat = owned[middle < start]
+        if self.comm.allreduce(len(flat)) > 0:
+            across = np.array([[0.0, -tp.b / 2, 0.0], [0.0, 0.0, 0.0], [0.0, tp.b / 2, 0.0]])
+            parts.append(BeamStripSurface(beam.model, flat, across, block=1))
+        return TurnContact(JoinedSurface(parts), self.frame, tp.h, c.penalty, c.smoothing, c.buffer)
 
     # -- measures ------------------------------------------------------------------------------
     def dofs(self) -> int:

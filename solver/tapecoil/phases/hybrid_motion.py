@@ -77,7 +77,17 @@ class HybridMotion:
         self._weight_work = [dolfinx.fem.form(w) for w in work]
         self.settings = settings or SolverConfig()
         shell.point_forces.extend(point_forces)
-        self.solver = hybrid._solver(F_s, J_s, self.settings, options, beam_forms=self.beam.forms)
+        # the parts' contact force at the level of the other internal forces, as the full shell's
+        alpha_f = self.shell_scheme.parameters.alpha_f
+        old_states = [self.shell_scheme.q_old, self.beam.scheme.q_old]
+        self.solver = hybrid._solver(
+            F_s,
+            J_s,
+            self.settings,
+            options,
+            beam_forms=self.beam.forms,
+            contact_levels=(1.0 - alpha_f, (alpha_f, old_states)),
+        )
         self.time = 0.0
 
     @property

@@ -42,6 +42,8 @@ class ContactSettings:
     max_turns: int
     ramp_width: float  # [rad]
     smoothing: float  # [m]
+    turns: str = "surface"  # what keeps the turns apart (contact.turns)
+    buffer: float = 0.0  # [m] the search's Verlet buffer between the turns' surfaces
 
 
 class WindowOnHub(ShellProblem):
@@ -85,7 +87,13 @@ class WindowOnHub(ShellProblem):
         model = self.model
         self.frame = frame
         self.contact = CoilContact(
-            model, frame, contact.penalty, contact.max_turns, contact.ramp_width, contact.smoothing, "spiral"
+            model,
+            frame,
+            contact.penalty,
+            contact.max_turns,
+            contact.ramp_width,
+            contact.smoothing,
+            contact.turns,
         )
         self.flattening = False
         self._along = AlongTape(self.contact.nodes, comm) if shift else None
