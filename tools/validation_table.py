@@ -99,6 +99,7 @@ def number(value: float | None, unit: str = "") -> str:
         return "not reached"
     if unit == "m":
         value, unit = value * 1e3, "mm"
+    value = value + 0.0  # no "-0"
     text = compact(f"{value:.4g}")
     return f"{text} {unit}" if unit and unit != "-" else text
 
@@ -128,7 +129,7 @@ def error_text(row: dict) -> str:
     if row["error"] is None:
         return "-"
     if row["measure"].get("absolute"):
-        return compact(f"{row['error']:.2g}")
+        return compact(f"{row['error'] + 0.0:.2g}")
     return percent(row["error"])
 
 
@@ -245,7 +246,7 @@ def page(results: list[dict]) -> str:
         "as the kept runs made it. This page and the table of the README are written by",
         "`tools/validation_table.py` from the `summary.json` files under `docs/results/`; nothing",
         "here is typed. To bring them up to date after a change of the physics, run",
-        "`make results MESH=coarse` (and `MESH=default`, about twenty minutes on two cores).",
+        "`make results MESH=coarse` (and `MESH=default`, several times longer).",
         "",
         "## The runs",
         "",
