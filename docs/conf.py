@@ -181,9 +181,10 @@ def configuration_page() -> str:
             else:
                 allowed_text = allowed.describe()
             default = getattr(getattr(defaults, section.name), f.name)
+            default = f"{default:.6g}" if isinstance(default, float) else repr(default)
             meaning = docs.get(f.name, "").replace("|", "\\|")
             out.append(
-                f"| `{f.name}` | {f.metadata.get('unit', '')} | `{default!r}` | {allowed_text} | {meaning} |"
+                f"| `{f.name}` | {f.metadata.get('unit', '')} | `{default}` | {allowed_text} | {meaning} |"
             )
         out.append("")
     return "\n".join(out)

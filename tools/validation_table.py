@@ -260,6 +260,16 @@ def page(results: list[dict]) -> str:
             f"{p.get('date', '?')} | {p.get('machine', '?')} |"
         )
     out += ["", "## Summary", "", validation_block(results).split("\n\nEach entry")[0], ""]
+    failed = sorted({split_label(table[k]["label"])[0] for k in table if table[k]["passed"] is False})
+    if failed:
+        out += [
+            "A FAIL is reported as the run made it, against the reference the measure names: "
+            + "; ".join(failed)
+            + ". The theory manual says where a reference does not describe this coil (for the",
+            "deployment time, [which energy the coil releases]"
+            "(../theory/deployment.md#which-energy-the-coil-releases)).",
+            "",
+        ]
     out += ["## Each check, its reference and its tolerance", ""]
     for key in keys:
         present = [(r, table[(r["name"], key)]) for r in results if (r["name"], key) in table]
