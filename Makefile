@@ -66,8 +66,8 @@ results: setup
 	  --command "mpirun -n $(NP) tapecoil run --mesh $(MESH)"
 
 lint: setup
-	$(RUN) ruff check solver tests demos tools
-	$(RUN) ruff format --check solver tests demos tools
+	$(RUN) ruff check solver tests demos tools docs/conf.py
+	$(RUN) ruff format --check solver tests demos tools docs/conf.py
 
 shell: setup
 	@$(ENV) shell
