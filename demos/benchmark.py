@@ -73,8 +73,8 @@ summary = run(config, out)
 
 # %% [markdown]
 # ## Against the theory
-# Every validated quantity with its reference and the tolerance it is held to (docs/coiling.md
-# and docs/deployment.md define each one).
+# Every validated quantity with its reference and the tolerance it is held to (docs/notes/coiling.md
+# and docs/notes/deployment.md define each one).
 
 # %%
 if rank0:

@@ -14,7 +14,7 @@ from tapecoil.phases.tension_study import TensionStudy, coiling_tension
 
 STEEL = Path(__file__).resolve().parents[1] / "demos" / "coiling_tension_steel.toml"
 # a shorter piece than the study's 0.2 m coiled 5.5 rad (a quarter of the time): on r_c/R = 0.9
-# its stretch 1 to 2 rad from the root is steady enough (docs/regimes.md)
+# its stretch 1 to 2 rad from the root is steady enough (docs/notes/regimes.md)
 SHORT = TensionStudy(length=0.12, hub_angle=3.0, section_window=(1.0, 2.0))
 
 
@@ -27,7 +27,7 @@ def _check(result):
     # energy per unit length of the steady coil: the plate less both edges' relief. The relief is
     # 4.8 % of the plate's value here, so the plate alone is far outside the tolerance; 0.5 %
     # covers every steady stretch measured (0.01 to 0.48 % from r_c/R = 0.4 to 0.9, 0.12 to
-    # 0.21 % on this piece with 9 to 36 elements across: docs/regimes.md)
+    # 0.21 % on this piece with 9 to 36 elements across: docs/notes/regimes.md)
     energy, edges = result["coil_energy_per_length"], result["edge_layer_energy_per_length"]
     assert energy == pytest.approx(edges, rel=5e-3)
     assert abs(energy / result["plate_energy_per_length"] - 1) > 0.03

@@ -92,7 +92,7 @@ def test_ploy_length_is_measured_one_turn_in(stowed):
 def test_coiling_tension_against_eq_2_6():
     """Steady coiling tension on hubs r_c/R = 0.5 ... 0.9 (default mesh, 0.2 m pieces coiled
     5.5 rad): T - N at the root's clamp against Eq. 2.6, and the coil's own steady stretch
-    against the plate with its free edges' layers (docs/regimes.md: 0.05 to 0.37 % in energy,
+    against the plate with its free edges' layers (docs/notes/regimes.md: 0.05 to 0.37 % in energy,
     2 to 3 % in the edges' lift)."""
     from tapecoil.config import load_config
     from tapecoil.phases.tension_study import coiling_tension_study
@@ -125,7 +125,7 @@ def assert_coiled_to_36_rad(summary: dict) -> None:
 
 def test_equal_sense_benchmark_against_its_plate_estimate():
     """The benchmark coiled in equal sense to 36 rad on the default mesh (the coarse one stops
-    at 33.9 rad: docs/coiling.md), against the equal-sense plate estimate of physics.md Sec. 10
+    at 33.9 rad: docs/notes/coiling.md), against the equal-sense plate estimate of physics.md Sec. 10
     with the opposite sense's tolerances. Measured: energy -0.87 %, curvature 0.35 %, stresses
     0.70 % and 0.69 %, outer radius 0.24 %. The section's edges start 9.3 mm inside the hub, so
     the flattening runs without the penetration stop."""

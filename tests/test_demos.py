@@ -27,6 +27,10 @@ EXPECTED = {
         ["tape_fold-smoke/fold.bp", "tape_fold-smoke/moment_rotation.png", "tape_fold-smoke/summary.json"],
         ["moment plateau / alpha (sqrt(D11 D22) + D12)", "written:"],
     ),
+    "sze_semicylinder.py": (
+        ["sze_semicylinder-smoke/summary.json", "sze_semicylinder-smoke/load_deflection.png"],
+        ["deflection under the load at P = 2000", "written:"],
+    ),
     "benchmark.py": (
         [
             "benchmark-coarse-smoke/summary.json",
@@ -47,6 +51,11 @@ def _check_results(directory: Path, demo: str) -> None:
         summary = json.loads((directory / "results/tape_fold-smoke/summary.json").read_text())
         # the smoke run still passes the snap, the step it exists to exercise
         assert summary["info"]["snap_angle"] is not None
+    if demo == "sze_semicylinder.py":
+        summary = json.loads((directory / "results/sze_semicylinder-smoke/summary.json").read_text())
+        # the whole load reached, the crown pushed towards the axis by about Sze's deflection
+        assert summary["path"][-1][0] == pytest.approx(2000.0)
+        assert 1.5 < summary["W"] < 1.8
     if demo == "benchmark.py":
         summary = json.loads((directory / "results/benchmark-coarse-smoke/summary.json").read_text())
         assert summary["completed"] and summary["deployment"]["lambda"] == pytest.approx(1.0, abs=1e-6)

@@ -241,7 +241,7 @@ def free_hub_config(inertia: float, t_end: float = 0.004) -> Config:
 
 def short_tape_inertia(config) -> float:
     """The short tape's own rotary inertia were it wound whole (theory.stowed_rotary_inertia,
-    the J_tape of docs/deployment.md) [kg m^2], about 5.7e-7."""
+    the J_tape of docs/notes/deployment.md) [kg m^2], about 5.7e-7."""
     from tapecoil import theory
 
     tp = config.tape

@@ -109,7 +109,7 @@ def test_a_heavy_free_hub_follows_the_free_hub_model(deployed):
 def test_a_light_free_hub_follows_the_model_until_the_coil_blossoms(deployed):
     """J = 10 times the tape's own: within 5 % of the model at lambda = 0.5 (measured +3.4 % in
     time, -3.6 % in the hub's turn), to lambda = 0.6; beyond, the spinning coil flings its outer
-    turns off (docs/deployment.md). The angular momentum of tape and hub, read from the
+    turns off (docs/notes/deployment.md). The angular momentum of tape and hub, read from the
     velocities, is kept after the release (measured to 2 %)."""
     summary, history = free_hub_run(10.0, 0.6, 2.5e-4)
     assert summary["completed"], summary["message"]

@@ -349,7 +349,7 @@ def test_two_ranks_solve_the_hybrid_as_one():
         carry_over(old, moved)
         energies.append((old.energy(), moved.energy()))
     # the flattened end's converged state is determined only so far: the joint Jacobian is
-    # ill-conditioned there (docs/hybrid.md, the flat tie's penalty) and the two runs' steps cut
+    # ill-conditioned there (docs/notes/hybrid.md, the flat tie's penalty) and the two runs' steps cut
     # back differently; measured, their tips 3.4e-6 m apart, the equilibrium energies 1.4e-10
     # and the moved ones, off equilibrium and so first order in that gap, 1.4e-7
     assert energies[0][0] == pytest.approx(energies[1][0], rel=1e-8)

@@ -262,7 +262,7 @@ def test_the_hybrids_root_loads_balance_the_tapes_momenta():
       impulse.
 
     The energy account takes gravity's work: no energy is created until the window moves (the
-    move adds the strain of the sections it places: docs/hybrid.md). (Before the old window's
+    move adds the strain of the sections it places: docs/notes/hybrid.md). (Before the old window's
     edge was settled at a move, the window's root rang after it with forces of 500 N: see
     tapecoil.models.window_settling.)"""
     import dolfinx
@@ -410,7 +410,7 @@ def test_a_window_move_turns_shell_into_beam_without_the_fits_shear():
     time); settled with their ends held, the stretch keeps the shell's configuration to 1e-5 m
     (measured 9.8e-6 m) and the fit's shear strain goes: the beam's strain energy falls from
     5.2e-4 to 2.3e-5 J (below a fifth asked), and the strain energy rises across the move by
-    1.0e-3 of itself (2e-3 asked; 3.8e-3 with the fitted nodes kept: docs/hybrid.md, "Where
+    1.0e-3 of itself (2e-3 asked; 3.8e-3 with the fitted nodes kept: docs/notes/hybrid.md, "Where
     the energy goes at a move")."""
     deployment = short_deployment(MPI.COMM_WORLD)
     assert len(deployment.moves) == 2

@@ -374,7 +374,7 @@ def test_cfrp_tape_folds_at_its_orthotropic_plateau(preset):
     """The [0/90]s tape's opposite-sense fold (physics brief Sec. 10): the moment plateau
     alpha (sqrt(D11 D22) + D12) within 5 %, the fold radius R sqrt(D11/D22) = 2.3 R within 10 %,
     the section flat in the fold. The fold's energy per unit area is not held to the 5 % of the
-    isotropic case: it comes out 6 % below w(R sqrt(D11/D22)) on both meshes (docs/laminates.md)."""
+    isotropic case: it comes out 6 % below w(R sqrt(D11/D22)) on both meshes (docs/notes/laminates.md)."""
     from tapecoil.verification.cases import run_case
 
     result = run_case("tape-fold", load_config(CFRP), preset)

@@ -172,7 +172,7 @@ def test_convergence_is_judged_on_the_residual(user_options):
 
 def test_the_turns_contact_solver_keeps_the_divergence_test():
     """The turns' contact keeps PETSc's divergence test: without it the default-mesh coiling ran
-    away, no step converging while the memory filled (docs/coiling.md).
+    away, no step converging while the memory filled (docs/notes/coiling.md).
     (An option of -1 would not have switched it off: PETSc 3.22 and 3.25 read -1 as
     PETSC_DETERMINE, the default.)"""
     from tapecoil.contact.term import SOLVER_OPTIONS

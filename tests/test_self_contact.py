@@ -373,7 +373,7 @@ def test_a_retry_forgets_the_partners_kept(folded):
     inside it; a retry of the step (no state converged since) keeps none and starts from the
     closest cells, as a run restarted from the converged state does. Deployments on the coarse
     mesh that stopped with every cut-back failing went on when restarted from the state they
-    stopped at (docs/coiling.md); with the partners forgotten on a retry, they went on unstopped."""
+    stopped at (docs/notes/coiling.md); with the partners forgotten on a retry, they went on unstopped."""
     _, _, _, term, _, _ = folded
     term.begin()
     pairs = term.current()

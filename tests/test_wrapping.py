@@ -164,7 +164,7 @@ def test_a_hub_smaller_than_the_tape_radius_wraps_it_without_folds():
 def test_a_tension_dominated_hub_folds_the_tape_twice_or_more_before_it_conforms():
     """r_c/R = 4.3 (Wilson et al.'s experiment, 4.125 to 4.3): two folds or more, of radius
     between R and r_c, form before the tape conforms (Wilson et al. 2020). The tension is
-    recorded, not held to Eq. 2.9: it comes out near a tenth of it (docs/regimes.md)."""
+    recorded, not held to Eq. 2.9: it comes out near a tenth of it (docs/notes/regimes.md)."""
     r = _wrap(4.3)
     R, r_c = STEEL["tape"]["R"], 4.3 * STEEL["tape"]["R"]
     assert r["regime"] == "tension" and r["completed"], r["message"]

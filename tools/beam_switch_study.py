@@ -1,5 +1,5 @@
 """A tape coiled as a beam alone: the arc section ahead of the wound length, the flattened
-strip behind it (docs/beam.md, "A beam alone does not make the ploy region").
+strip behind it (docs/notes/beam.md, "A beam alone does not make the ploy region").
 
 The benchmark tape (physics brief Sec. 1) as a beam of ELEMENTS elements along LENGTH [m], its
 root clamped to the 12.7 mm hub and turned by WRAP pi [rad], a 1 N pull held along a guide

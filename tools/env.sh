@@ -27,6 +27,8 @@ MIN_FREE_GB=${TAPECOIL_MIN_FREE_GB:-8}
 # libopenblas0-serial replaces the reference BLAS that PETSc and MUMPS are linked against
 # (Debian's default): a Newton iteration of the default-mesh coiling run took 0.248 s with the
 # reference BLAS and 0.169 s with OpenBLAS on one rank, 0.160 s and 0.113 s on two.
+# Sphinx, MyST, furo, jupytext and MathJax build the documentation (make docs); chromium
+# renders it headless in its check (make docs-check).
 PACKAGES=(
   python3-dolfinx-real python3-petsc4py-real python3-mpi4py python3-gmsh
   python3-adios4dolfinx python3-scipy python3-matplotlib python3-pyvista python3-meshio
@@ -34,6 +36,7 @@ PACKAGES=(
   libopenblas0-serial
   python3-pip python3-venv python3-setuptools
   openmpi-bin xvfb xauth make git ca-certificates
+  python3-sphinx python3-myst-parser furo python3-jupytext libjs-mathjax chromium
 )
 
 die() {

@@ -1,4 +1,4 @@
-"""The benchmark deployment with a free hub against the free-hub model (docs/deployment.md).
+"""The benchmark deployment with a free hub against the free-hub model (docs/notes/deployment.md).
 
     tools/env.sh run mpirun -n 2 python3 tools/free_hub_study.py --inertia 10 --max-dt 2.5e-4
 

@@ -1,7 +1,7 @@
 """Where the hybrid's coiling spends its time: the benchmark tape (or ``--angle`` [rad] of it)
 flattened and coiled by the hybrid under cProfile, then the cumulative times of its Newton
 solves, Jacobians and residuals, window builds and carry-overs, and of the forms created, with
-their callers (docs/hybrid.md, "Where the time goes"). Under mpirun, rank 0's.
+their callers (docs/notes/hybrid.md, "Where the time goes"). Under mpirun, rank 0's.
 
     tools/env.sh run env PYTHONPATH=solver python3 tools/hybrid_coil_profile.py [--angle 36]
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/hybrid_coil_profile.py --angle 6

@@ -1,5 +1,5 @@
 """The joint Jacobian's spectrum at the equilibrium of a tape flattened at its root, as a hybrid
-(docs/hybrid.md, "The flat tie's penalty"): the benchmark tape's first 0.05 m a beam of the
+(docs/notes/hybrid.md, "The flat tie's penalty"): the benchmark tape's first 0.05 m a beam of the
 flattened strip's section tied flat to 0.15 m of shell, the arc-section beam beyond, 0.3 m in all,
 coarse mesh, flattened by steps to 1, with the ties' penalty factor PENALTY, its tip pulled along
 the tape by PULL [N] (the benchmark's coiling tension is 1 N; default 0). Prints the residual

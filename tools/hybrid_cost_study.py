@@ -2,7 +2,7 @@
 its turned end to pi (`tapecoil verify hybrid-fold`: 0.3 m of shell at the root, the arc-section
 beam beyond), at lengths LENGTHS [m], on the coarse mesh preset, one rank. Prints, per length,
 the DOFs, Newton iterations and wall times of both models, their ratio and the hybrid's
-plateau against the full shell's (docs/hybrid.md, "Cost against length").
+plateau against the full shell's (docs/notes/hybrid.md, "Cost against length").
 
     tools/env.sh run env PYTHONPATH=solver python3 tools/hybrid_cost_study.py [PRESET [LENGTHS...]]
 """

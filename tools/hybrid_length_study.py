@@ -4,7 +4,7 @@ section and hub at length L [m] (argument), coiled until FREE [m] of it stays of
 other (`tapecoil.verification.hybrid_coil.coil_side_by_side`), on a mesh preset (second argument,
 default "default"). Prints the hub angle and, for both models, the stored energy, coiled
 length, outer radius, outer turn's coiling tension, free part's height, DOFs, steps, Newton
-iterations and wall time (docs/hybrid.md, "Cost against the tape's length"); ``--json FILE``
+iterations and wall time (docs/notes/hybrid.md, "Cost against the tape's length"); ``--json FILE``
 also writes them there, for tools/hybrid_length_plot.py.
 
 With ``--deploy`` the hybrid coils and then deploys to ``--lambda-end``, and the full shell

@@ -1,4 +1,4 @@
-"""What a move of the hybrid's window costs against a load step (docs/hybrid.md, "Moving the
+"""What a move of the hybrid's window costs against a load step (docs/notes/hybrid.md, "Moving the
 window"): a 0.5 m cantilever of the benchmark section on the default mesh (9 elements across,
 4 mm along), its root clamped on the beam, a shell window of 0.148 m from 0.048 m, under a tip
 force stepped by 0.05 N; the window moved on by 20 mm MOVES times, each move followed by one

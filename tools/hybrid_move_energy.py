@@ -11,7 +11,7 @@ material coordinate with the solve's own quadrature:
   check: its energy passes to round-off).
 
 Printed per move: the time, the window before and after, and each stretch's energy before and
-its change [J]; the energy of the ties and of contact are left out (docs/hybrid.md, "The
+its change [J]; the energy of the ties and of contact are left out (docs/notes/hybrid.md, "The
 deployment by the hybrid").
 
     tools/env.sh run [mpirun -n 2] env PYTHONPATH=solver python3 tools/hybrid_move_energy.py [--mesh coarse]

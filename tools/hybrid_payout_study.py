@@ -5,7 +5,7 @@ model, the payout's DOFs, steps, Newton iterations and wall time, the coiling's 
 window's moves, and the payout's measures band by band (hub torque against steady coiling, the
 outer turn's and the root's T - N against their laws); then the two side by side at the
 hybrid's hub angles (the full shell's history interpolated): strain energy, coiled length,
-outer coil radius and hub torque (docs/hybrid.md, *A driven hub's payout by the hybrid*).
+outer coil radius and hub torque (docs/notes/hybrid.md, *A driven hub's payout by the hybrid*).
 
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/hybrid_payout_study.py 36 0.9 default
 """

@@ -2,7 +2,7 @@
 coiled and deployed to lambda = 0.95 by the hybrid with ``model.window_ahead`` = AHEAD [m];
 prints the coiling's wall time and steps, the deployment's wall time, steps, Newton iterations,
 DOFs (the window at its longest) and window moves, the time to lambda = 0.9 and the stowed
-energy (docs/hybrid.md, "A shorter window does not make it three times faster"). Run two reaches
+energy (docs/notes/hybrid.md, "A shorter window does not make it three times faster"). Run two reaches
 one after the other, alternated, to compare their costs in one session.
 
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/hybrid_window_reach.py 0.1

@@ -7,7 +7,7 @@ spiral of turns beneath (the shell contact's nodal penetration, negated: the sam
 both models) is followed step by step; printed: each station's peak gap [h] and when it came
 [ms], for both models, and the hybrid's reading behind its window (the flattened beam's largest gap to its
 turn, where it stops at 2 h: ``CoilLoosening``, which ends the hybrid's part and is printed)
-with where and when it was largest (docs/hybrid.md, "The release's wave and the window's
+with where and when it was largest (docs/notes/hybrid.md, "The release's wave and the window's
 length"). ``--error-tolerance`` and ``--max-dt`` set the deployment's steps.
 
     tools/env.sh run mpirun -n 2 env PYTHONPATH=solver python3 tools/release_wave.py

@@ -1,4 +1,4 @@
-"""Folds seeded with temporary cylinders, as Wilson et al. (2020) seed them (docs/regimes.md,
+"""Folds seeded with temporary cylinders, as Wilson et al. (2020) seed them (docs/notes/regimes.md,
 "Seeded folds"): load-stepped, the wrap over them stalls; taken through in time, it passes.
 
 The wrapping study's wrap (``tapecoil.phases.wrapping``) with SEEDS rigid cylinders fixed to the

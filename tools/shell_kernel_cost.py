@@ -2,7 +2,7 @@
 preset, default "default") with the spiral of turns of ``--hub-angle`` [rad], each energy's
 Hessian (membrane, bending, shear, the whole strain, the contact, strain and contact) and the
 coiling solver's Jacobian and residual assembled alone, 20 times each, on one rank; prints the
-mean time of each [ms] (docs/hybrid.md, "A shorter window does not make it three times
+mean time of each [ms] (docs/notes/hybrid.md, "A shorter window does not make it three times
 faster": the spiral's turns enter the contact's kernel).
 
     tools/env.sh run env PYTHONPATH=solver python3 tools/shell_kernel_cost.py [--hub-angle 141.9]
