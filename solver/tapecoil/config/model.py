@@ -17,7 +17,7 @@ class ModelConfig:
     Attributes:
         kind: 'shell' (the Naghdi shell over the whole tape) or 'hybrid' (shell on a window
             around the ploy region, geometrically exact beams before and after it:
-            docs/hybrid.md). The hybrid coils in the opposite sense on the spiral of turns
+            docs/notes/hybrid.md). The hybrid coils in the opposite sense on the spiral of turns
             (contact.turns = 'spiral'), on an ungraded mesh (mesh.grading = 1). Its coiled state
             is carried into the full shell and settled there by one solve at the final hub
             angle (the stowed state); the hybrid then deploys from its own coiled state, its
@@ -27,14 +27,14 @@ class ModelConfig:
         window_ahead: the hybrid's shell beyond the lift-off point [m] (the ploy region and a
             margin: with 0.15 m the outer turn's coiling tension came out 0.7 % low on the 0.5 m
             benchmark and 1.4 % low on a 1 m tape, with 0.2 m within its error of the full
-            shell's; docs/hybrid.md, "The window's reach").
+            shell's; docs/notes/hybrid.md, "The window's reach").
         window_behind: the hybrid's shell on the coil behind the lift-off point [m].
         window_move: how far the lift-off travels before the window moves with it [m].
         window_release: the coil the hybrid's window holds behind the lift-off when the tape is
             let go [m] (at least: more if the coiling's window held more; a coil shorter than
             this keeps the coiling's window). The release sends a wave of lift down the coil,
             on the benchmark above two thicknesses to about 0.1 m behind the lift-off with the
-            default steps, which the flattened beam cannot follow (docs/hybrid.md, "The
+            default steps, which the flattened beam cannot follow (docs/notes/hybrid.md, "The
             release's wave and the window's length"). The window takes its own length again at
             its first move.
         tie_penalty: the penalty factor of the ties between shell and beams [-] (times the
@@ -43,7 +43,7 @@ class ModelConfig:
             section, as the shell: its edges and line by Simpson's rule) or 'line' (its
             centre line alone, which lets the section turn about it unresisted: the 2 m
             tape's coil then came loose a third of a second into its deployment;
-            docs/hybrid.md, "The flattened coil's twist").
+            docs/notes/hybrid.md, "The flattened coil's twist").
     """
 
     kind: str = param("shell", "", ("shell", "hybrid"))

@@ -61,7 +61,7 @@ class PairsAtState:
 # smoothed normal is not the gradient of an energy, so neither matrix is symmetric: LU, not
 # MUMPS' LDL^T. PETSc's divergence test (1e4 times the first residual) stays: without it a
 # step of the default-mesh coiling whose Newton runs away goes on for minutes, its memory
-# growing, where the test cuts the step back and the run goes on (docs/coiling.md)
+# growing, where the test cuts the step back and the run goes on (docs/notes/coiling.md)
 SOLVER_OPTIONS = {
     "pc_type": "lu",
     "ksp_type": "gmres",

@@ -28,7 +28,7 @@ The winding angle is kept in both: the predictor, the measures and the pictures 
 The bracket <g> is smoothed over a width delta (delta softplus(g/delta), ``contact.smoothing``
 = delta/h, default 1/20): with the plain bracket Newton cycles as nodes enter and leave
 contact. On the coarse benchmark h/20 takes fewer Newton iterations than the plain bracket
-and than h/200, with the same energies and largest penetration (docs/coiling.md). The price
+and than h/200, with the same energies and largest penetration (docs/notes/coiling.md). The price
 of h/20: the tape rests a few delta off the coil and, near the lift-off point, that extra
 support lowers the coiling tension (the axial-force balance of the coiling module) a little.
 So the coiling-tension study uses the plain bracket.

@@ -81,7 +81,7 @@ def deployment_measures(config, history: list[dict]) -> dict:
     free_hub = {}
     if config.deployment.hub == "free":
         # also half-way: a light hub spins the coil fast enough to fling its outer turns off
-        # (blossoming), which the model, whose coil stays tight, does not know (docs/deployment.md)
+        # (blossoming), which the model, whose coil stays tight, does not know (docs/notes/deployment.md)
         model_basis = "the model's deployed part is a rigid rod and its coil turns with the hub as one body"
         for lam in (0.5, 0.9):
             turn = at_crossing(history, lam, "hub_angle")
@@ -146,7 +146,7 @@ def deployment_measures(config, history: list[dict]) -> dict:
             "final_dissipated_fraction": float(dissipated[-1] / stowed),
             "largest_growth_fraction": largest_growth,
             "final_kinetic_fraction": history[-1]["kinetic_energy"] / stowed,
-            # the remainder's parts at the end (docs/deployment.md): the scheme's dissipation,
+            # the remainder's parts at the end (docs/notes/deployment.md): the scheme's dissipation,
             # the converged residual's work and the contact updates' change of energy
             **{
                 f"final_{key}_fraction": history[-1][key] / stowed

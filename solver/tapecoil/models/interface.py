@@ -4,7 +4,7 @@ Every point X of the shell's edge keeps its place in the section frame of the be
 edge's position is phi(X) = r_e + Q (X - X_e) and its director is d(X) = Q n0(X), where r_e is
 the end node's position, X_e its reference position and Q the rotation of its section since
 the reference. Force and moment pass through the tie in full, and the section cannot deform
-at the edge; how far from the edge that matters is measured in docs/hybrid.md.
+at the edge; how far from the edge that matters is measured in docs/notes/hybrid.md.
 
 The section keeps the shape of the beam it is tied to: the arc (``section="arc"``, X - X_e and
 n0 as above: a beam of the arc section, about the arc's centroid) or the flattened strip

@@ -41,7 +41,7 @@ those terms are integrated exactly with low-order elements. ``technology`` selec
     reported with exactly the quadrature the solve uses.
   - "full": everything with full quadrature; kept as the locking reference of the
     verification table.
-docs/shell-technology.md records the measurements behind the choice (a Hellinger-Reissner
+docs/notes/shell-technology.md records the measurements behind the choice (a Hellinger-Reissner
 variant with discontinuous resultants was tried and rejected: zero-energy modes).
 
 This module holds the material and the shell's state, kinematics and energy forms; beside it,

@@ -33,7 +33,7 @@ length), so every transfer is made node by node, without interpolation along the
 A section carried between beam and shell keeps its place and its turn. The shell's section
 deformation beyond the beam's shape is dropped where shell becomes beam, and the shell's own
 interpolation error of a turned arc is added where beam becomes shell: the energy is conserved
-where the section has the beam's shape (docs/hybrid.md gives the measured figures).
+where the section has the beam's shape (docs/notes/hybrid.md gives the measured figures).
 
 The rates of a moving tape are carried over by :func:`~tapecoil.models.window_motion.carry_motion`,
 and the sections a move placed settle by :mod:`~tapecoil.models.window_settling`.

@@ -23,7 +23,7 @@ __all__ = ["settle", "settle_at_rest", "settle_placed", "settle_withdrawn"]
 
 # settle_placed frees the old window's edge and this many of the old shell's elements beside it:
 # the old edge was held to a rigid section by its tie, and its neighbours stood in equilibrium
-# with it; the new shell's element across the edge pulls on them (docs/hybrid.md, "The placed
+# with it; the new shell's element across the edge pulls on them (docs/notes/hybrid.md, "The placed
 # sections settled", has the root's reaction after a move with the edge, one and two elements)
 SETTLED_OLD_ELEMENTS = 1
 
@@ -122,7 +122,7 @@ def settle_withdrawn(hybrid, stretch: tuple[float, float], config) -> dict:
     centroid. Where the section is not the beam's (in time its arc breathes, flattened a little
     here and less there), the centroid's place across the tape varies along it and the fitted
     line leans off the fitted frames: a transverse shear that the beam's large shear stiffness
-    holds with many times the shell's strain energy of that stretch (docs/hybrid.md, "Where the
+    holds with many times the shell's strain energy of that stretch (docs/notes/hybrid.md, "Where the
     energy goes at a move"). Returns the beam's strain energy [J] before and after, the largest
     displacement [m] and the Newton iterations (collective); on a failed solve the fitted state
     is kept and ``converged`` is False."""

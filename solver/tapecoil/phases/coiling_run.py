@@ -49,7 +49,7 @@ class CoilingRun(SteppedRun):
     easy_iterations = 8
     # the largest step [rad] of each predictor, unless coiling.max_step sets one: the shift
     # predicts a turning hub's state well enough for long steps, fewer in all than shorter ones
-    # take; the secant needs short ones (the benchmark's counts: docs/coiling.md)
+    # take; the secant needs short ones (the benchmark's counts: docs/notes/coiling.md)
     max_steps: ClassVar[dict[str, float]] = {"shift": 1.0, "secant": 0.3}
 
     def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None, stop=None):

@@ -3,7 +3,7 @@ an end held or pulled.
 
 A quasi-static load path stops where the tape snaps between equilibria that no path joins: a
 fold forming as the tape is wound over a seed cylinder, a fold collapsing as the seed is
-withdrawn (docs/regimes.md). Explicit codes pass such snaps in time (Wilson et al. 2020 use
+withdrawn (docs/notes/regimes.md). Explicit codes pass such snaps in time (Wilson et al. 2020 use
 LS-DYNA). :class:`DrivenMotion` does it implicitly: the coiling model's potential (strain, hub and
 turns' contact, the further bodies, the dead pull at the free end) with the shell's inertia
 (:class:`~tapecoil.phases.deployment_forms.DeploymentForms`), stepped by generalized-alpha with a

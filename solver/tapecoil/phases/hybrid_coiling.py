@@ -20,7 +20,7 @@ sections (:class:`~tapecoil.models.hybrid_problem.HybridProblem`):
   polar angle along the tape from the root.
 
 The window holds ``behind`` of coil and ``ahead`` of tape beyond the lift-off: the ploy region,
-where the section goes from flat to the arc, lies there (docs/hybrid.md gives the
+where the section goes from flat to the arc, lies there (docs/notes/hybrid.md gives the
 measurements behind the defaults). Once the window reaches the free end it stays there, the
 free end's guide and pull on the shell.
 """
@@ -251,7 +251,7 @@ class HybridCoiling:
                 c.smoothing,
                 # across its width, the flattened strip rests as the shell's does: a line
                 # alone lets the coil's section twist, and the sections that a window move
-                # places from it dig their edges into the turn beneath (docs/hybrid.md)
+                # places from it dig their edges into the turn beneath (docs/notes/hybrid.md)
                 half_width=(
                     (lambda x: np.where(x < start, tp.b / 2, 0.0))
                     if self.window.beam_contact == "width"
@@ -266,7 +266,7 @@ class HybridCoiling:
             # held in the plane of coiling, free to turn in it: the full shell's guide holds the
             # end's directors, but its reduced-integrated shear lets the end section pitch within
             # the last element; with the pitch held the hybrid's free part stood higher and its
-            # tape left the coil early (docs/hybrid.md, the free end)
+            # tape left the coil early (docs/notes/hybrid.md, the free end)
             beam.hold(tip, (1, 2), rotation=(0, 2))
             beam.end_load(tip, force=(self.pull, 0.0, 0.0), constant=True)
             if self.predictor == "shift":

@@ -108,7 +108,7 @@ class HybridDeploymentMeasures:
         tp = self.tape
         x, psi, gap, coiled = coiled_along(self.hybrid, self.frame, self.hub_angle, tp)
         # the stretch of beam that the next moves place into shell, where it rests on a turn
-        # (on the hub, by the root, the release lifts it by a few thicknesses: docs/hybrid.md)
+        # (on the hub, by the root, the release lifts it by a few thicknesses: docs/notes/hybrid.md)
         start = self.window()[0]
         behind = (x < start - 1e-9 * tp.L) & (x > start - self.reach) & (psi > 2 * math.pi)
         loosest = int(np.argmax(np.where(behind, gap, -np.inf))) if behind.any() else None

@@ -15,7 +15,7 @@ contact that loads them:
   at Eq. 2.6 at that turn's mid-surface radius, which is Eq. 4.5 with the coil's growing
   radius: the tension the driven hub must hold for the coil to stay wound as it pays out.
 - ``coiling_tension`` (the coiling's): T - N at the root, where the clamp holds the whole width
-  flat (docs/deployment.md compares the two readings).
+  flat (docs/notes/deployment.md compares the two readings).
 
 The hub torque (from the root's reactions) is compared with steady coiling, rho (T + b w(rho))
 with rho the outermost turn's mid-surface radius (:func:`tapecoil.measures.payout.payout_measures`).

@@ -25,7 +25,7 @@ def choose_predictor(setting: str, element_length: float, r_hub: float) -> str:
     turn they are wound into: on the benchmark (each predictor with its own largest step) the
     default mesh, its elements a third of the hub radius, takes a fraction of the secant's
     Newton iterations with the shift, and the coarse mesh, its elements about the hub radius,
-    more (docs/coiling.md). "auto" takes the shift up to elements of half the hub radius.
+    more (docs/notes/coiling.md). "auto" takes the shift up to elements of half the hub radius.
     """
     if setting != "auto":
         return setting
@@ -123,7 +123,7 @@ class CoilingPredictor:
         being wound), with u_x lowered by ds; the two are blended over the last radian before the
         tangent point, where both hold. With ``"secant"`` that part is instead extrapolated from
         the last two converged states, which gets the ploy region wrong by about r dtheta^2 / 2
-        (measurements in docs/coiling.md).
+        (measurements in docs/notes/coiling.md).
         """
         current = q.copy()
         dtheta = angle_to - angle_from

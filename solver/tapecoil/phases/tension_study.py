@@ -31,7 +31,7 @@ class TensionStudy:
         section_window: winding angles from the root [rad] of the stretch of coil whose own
             sections are read at the end, away from the root's clamp and from the lift-off.
             It must be steady coil: a stretch too near the root or the lift-off reads an
-            energy per unit length off the steady value (docs/regimes.md). Empty: no such
+            energy per unit length off the steady value (docs/notes/regimes.md). Empty: no such
             readings.
     """
 

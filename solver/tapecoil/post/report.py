@@ -207,8 +207,8 @@ def write_report(directory: str | Path, pictures: bool = True) -> Path:
         "<h2>Validation</h2>",
         "<p>Every validated quantity against its reference, with the tolerance it is held to "
         "('reported': no pass mark). Why each tolerance is what it is, from the physics and the "
-        "literature, is recorded with it in summary.json ('basis'). Definitions: docs/coiling.md, "
-        "docs/deployment.md.</p>",
+        "literature, is recorded with it in summary.json ('basis'). Definitions: docs/notes/coiling.md, "
+        "docs/notes/deployment.md.</p>",
         _validation_table(summary["validation"]),
         "<h2>Pictures</h2>",
     ]

@@ -25,7 +25,7 @@ beta = (k / (4 D22))^(1/4) the layer of a semi-infinite beam under an end moment
   Delta T does not: near r_c/R = 1 the edges carry most of the tension.
 
 Isotropic wall: D22 = D, D12 = nu D, S = E h, beta = (3 (1 - nu^2))^(1/4) / sqrt(h rho). The
-shell's coil has been checked against the layer on isotropic walls only (docs/regimes.md); for
+shell's coil has been checked against the layer on isotropic walls only (docs/notes/regimes.md); for
 a laminate the same beam takes D22, D12 and S, and B = 0 is assumed (a symmetric layup). The
 layer is linear in the lift, which is a fraction of h (0.36 h for the steel tape on
 r_c/R = 0.9), and needs beta b >> 1 (two layers that do not meet; beta b = 26 there).

@@ -19,16 +19,16 @@ from tapecoil.verification.checks import CaseResult, Check
 # coarse mesh) and the coil then grows on the flattened beam
 COIL_ANGLE = 5.0
 # [rad] the outer turn's coiling tension is compared as its mean over the steps from this hub
-# angle on: per step it swings as nodes pass the lift-off (docs/hybrid.md)
+# angle on: per step it swings as nodes pass the lift-off (docs/notes/hybrid.md)
 TENSION_FROM = 6.0
 # [m] the free part's height, hybrid against full shell: a fifth of what the hybrid's free part
 # stood higher by with its end held from turning in the plane of coiling, which the full
-# shell's guide in effect does not hold (docs/hybrid.md)
+# shell's guide in effect does not hold (docs/notes/hybrid.md)
 FREE_PART_TOLERANCE = 1e-4
 # the full shell settled from the hybrid's coil against the full shell's own coiling, on this
 # case's short coil: equilibria of the same discrete problem but for the winding angles that
 # each path reads from its own states, which agree far within these. On the 36 rad benchmark
-# the two stowed states differ more (docs/hybrid.md): the coil's turns settle within microns of
+# the two stowed states differ more (docs/notes/hybrid.md): the coil's turns settle within microns of
 # each other
 SETTLED_ENERGY_TOLERANCE = 1e-6
 SETTLED_DISTANCE_TOLERANCE = 1e-6

@@ -27,12 +27,12 @@ DEPLOY_ANGLE = 36.0
 FRACTIONS = (0.5, 0.9, 1.0)
 # the times to those fractions, hybrid against full shell. The full shell's own time to
 # lambda = 0.9 moves by a fraction of a percent between two stowed states microns apart (the
-# deployment snaps and rattles its turns; docs/hybrid.md), and the hybrid's window moves add
+# deployment snaps and rattles its turns; docs/notes/hybrid.md), and the hybrid's window moves add
 # the strain of the sections turned into beam; the measured differences lie well within this
 TIME_TOLERANCE = 2e-2
 # the root's torque on the hub, integrated from release to lambda = IMPULSE_FRACTION: the angular
 # momentum the tape has taken by then, a measure of the whole deployment's loads on the hub
-# (its peaks do not converge in the step: docs/deployment.md). The tolerance is the times'
+# (its peaks do not converge in the step: docs/notes/deployment.md). The tolerance is the times'
 IMPULSE_FRACTION = 0.9
 IMPULSE_TOLERANCE = 2e-2
 
