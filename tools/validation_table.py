@@ -118,6 +118,8 @@ def percent(value: float) -> str:
 
 
 def tolerance_text(row: dict) -> str:
+    if row["measure"].get("bound") == "lower":
+        return "at least the reference"
     if row["tolerance"] is None:
         return "none (reported)"
     if row["measure"].get("absolute"):

@@ -225,6 +225,25 @@ class CoilContact:
             return self.spiral_radius(self.psi.x.array) - radius
         return self.r_hub + self.fairing_height(swept) - radius
 
+    def radial_reaction(self) -> float:
+        """The hub's push on the tape [N]: the radial components, away from the axis, of the
+        force its contact (with the fairing) exerts on the tape's nodes, summed (collective)."""
+        if getattr(self, "_reaction", None) is None:
+            form = dolfinx.fem.form(ufl.derivative(self.energy_hub, self.model.q, self.model.dq))
+            self._reaction = (form, dolfinx.fem.Function(self.model.W))
+        form, force = self._reaction
+        force.x.array[:] = 0.0
+        dolfinx.fem.assemble_vector(force.x.array, form)
+        force.x.scatter_reverse(dolfinx.la.InsertMode.add)
+        n_owned = self.nodes.space.dofmap.index_map.size_local
+        f = force.x.array[self.nodes.u_dofs[:n_owned]]  # dE/du at the owned nodes
+        x = self.nodes.positions(self.model.q.x.array)[:, :n_owned].T - np.asarray(self.axis_point)
+        radial = x.copy()
+        radial[:, 1] = 0.0  # the axis is along y
+        radial /= np.linalg.norm(radial, axis=1)[:, None]
+        local = float(-np.einsum("ni,ni->", f, radial))
+        return self.model.mesh.comm.allreduce(local)
+
     def _lab_angles(self) -> np.ndarray:
         return self.polar(self.nodes.positions(self.model.q.x.array))[1]
 

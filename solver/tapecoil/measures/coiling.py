@@ -16,6 +16,7 @@ import ufl
 from tapecoil import theory
 from tapecoil.core.dofs import cell_midpoint_values, global_scalar
 from tapecoil.measures.deployment import lift_off
+from tapecoil.measures.interlayer import coil_interlayer
 from tapecoil.measures.measure import Measure
 
 if TYPE_CHECKING:
@@ -231,6 +232,11 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     )
 
     out["ploy_length"] = ploy_measure(tape, coiled, xi1, xi2, k_trans)
+    interlayer = coil_interlayer(tape)
+    if interlayer is not None:
+        out["pressure_jump"] = interlayer.pop("pressure_jump", None)
+        out["hub_reaction"] = interlayer.pop("hub_reaction", None)
+        out["interlayer"] = interlayer
     return out
 
 

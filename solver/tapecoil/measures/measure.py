@@ -25,6 +25,9 @@ class Measure:
         source: where the reference comes from (an equation of the physics brief, a paper).
         basis: why the tolerance is what it is.
         absolute: the error is |computed - reference| instead of the relative error.
+        bound: "lower": the reference is a bound the computed value must reach (a separation at
+            least so large), not a value to match; the error is then the shortfall below it
+            (zero when reached), in the quantity's unit, and the tolerance 0.
         extra: further figures of the measurement (worst cell, sample counts, ...).
     """
 
@@ -35,13 +38,22 @@ class Measure:
     source: str = ""
     basis: str = ""
     absolute: bool = False
+    bound: str | None = None
     extra: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.bound not in (None, "lower"):
+            raise ValueError(f"a measure's bound is None or 'lower', got {self.bound!r}")
+        if self.bound is not None and self.tolerance != 0.0:
+            raise ValueError("a bound's tolerance is 0: the computed value must reach the bound")
 
     @property
     def error(self) -> float | None:
         """|computed - reference|, relative to |reference| unless ``absolute``; None if not reached."""
         if self.computed is None:
             return None
+        if self.bound == "lower":
+            return float(max(self.reference - self.computed, 0.0))
         difference = abs(self.computed - self.reference)
         if self.absolute:
             return float(difference)
@@ -64,7 +76,8 @@ class Measure:
             **self.extra,
             "label": self.label,
             "tolerance": self.tolerance,
-            "absolute": self.absolute,
+            "absolute": self.absolute or self.bound is not None,
+            "bound": self.bound,
             "passed": self.passed,
             "source": self.source,
             "basis": self.basis,
@@ -87,6 +100,7 @@ def validation_rows(phase: str, measures: dict) -> list[dict]:
             "reference": entry["reference"],
             "error": entry["error"],
             "tolerance": entry["tolerance"],
+            "bound": entry.get("bound"),
             "passed": entry["passed"],
         }
         for name, entry in measures.items()

@@ -339,9 +339,10 @@ def separation_measure(directory: str | Path, phase: str, comm=None) -> dict | N
     """The smallest separation of distinct turns over a phase's snapshots, as a measure entry.
 
     Read from the geometry of the snapshots alone (:func:`separation_history`), independently of
-    the contact that keeps the turns apart. Reported without a tolerance: with the default
-    ``contact.turns = "spiral"`` the turns rest on a prescribed obstacle and this is what that
-    obstacle lets them do. Computed on rank 0, where the snapshots are; every rank gets it
+    the contact that keeps the turns apart, and held to a lower bound (:func:`separation_bound`)
+    when the turns rest on each other's real surfaces; on the spiral obstacle
+    (``contact.turns = "spiral"``), which does not keep the turns off each other, it is reported
+    without one. Computed on rank 0, where the snapshots are; every rank gets it
     (collective when ``comm`` is given; an error there is raised on every rank). None when the
     phase wrote no snapshots.
     """
@@ -357,6 +358,7 @@ def separation_measure(directory: str | Path, phase: str, comm=None) -> dict | N
 
 def _separation_entry(directory: str | Path, phase: str) -> dict | None:
     """:func:`separation_measure`'s entry, on the rank that holds the snapshots."""
+    from tapecoil.config import load_config
     from tapecoil.measures.measure import Measure
 
     files, _ = snapshot_files(directory, phase)
@@ -365,12 +367,24 @@ def _separation_entry(directory: str | Path, phase: str) -> dict | None:
     history = separation_history(directory, phase)
     found = history.index is not None
     first = history.percentiles.get(1.0)
+    config = load_config(Path(directory) / "config.toml")
+    bound, sag = separation_bound(config)
+    real = config.contact.turns != "spiral"
     return Measure(
         "smallest separation of distinct turns / h, from the snapshots [-]",
         history.global_minimum if found else None,
-        1.0,
-        None,
+        bound if real else 1.0,
+        0.0 if real else None,
         "turns one thickness apart (physics brief Sec. 2): mid-surfaces h apart",
+        (
+            f"at least {bound:g} h: the turns one thickness apart, less the penalty's penetration "
+            f"and the elements' quadratic interpolation of the coil, which lies up to "
+            f"r_hub theta_e^4 / 512 = {sag:.2g} h inside the circle through the nodes (theta_e an "
+            "element's angle on the hub), on either turn"
+            if real
+            else "a reading of the spiral obstacle, which does not keep the turns off each other"
+        ),
+        bound="lower" if real else None,
         extra={
             "at": history.t_min if found else None,
             "at_unit": "rad" if phase == "coiling" else "s",
@@ -380,3 +394,18 @@ def _separation_entry(directory: str | Path, phase: str) -> dict | None:
             + ("" if found else " (no two turns lie over each other)"),
         },
     ).to_dict()
+
+
+def separation_bound(config) -> tuple[float, float]:
+    """The smallest separation of distinct turns / h a run of ``config`` must keep, and the
+    interpolation's sag / h it allows for: 0.9 where the elements follow the coil to a
+    hundredth of h (the sag of a quadratic element spanning theta_e of the hub, r_hub theta_e^4
+    / 512, on either turn), 0.8 where they do not (a coarse mesh's elements span a radian of
+    the coil: 0.2 h)."""
+    from tapecoil.geometry.meshes import MeshResolution
+
+    tp = config.tape
+    element = tp.L / MeshResolution.from_config(config.mesh, tp.L).along
+    theta = element / config.hub.radius
+    sag = config.hub.radius * theta**4 / 512 / tp.h
+    return (0.9 if 2 * sag <= 0.02 else 0.8), sag

@@ -120,6 +120,15 @@ class TapeOnHub:
         parts = self._contact_parts()
         return parts["contact_hub"] + parts["contact_coil"]
 
+    def section_forces(self) -> dict:
+        """The axial force across every section of the tape
+        (:class:`~tapecoil.measures.section_forces.SectionForces`; collective)."""
+        if getattr(self, "_sections", None) is None:
+            from tapecoil.measures.section_forces import SectionForces
+
+            self._sections = SectionForces(self.model, self.contact.nodes, self.comm)
+        return self._sections()
+
     # the phases and the measures read the centre line as the tape's
     centre_nodes = centre.centre_nodes
     centre_line = centre.centre_line

@@ -11,10 +11,23 @@ from tapecoil.config import ConfigError, load_config
 
 
 def _entries(measures: dict):
-    """(name, computed, reference, error) of the measures that have a reference."""
+    """(name, the measure) of the measures that have a reference."""
     for name, value in measures.items():
         if isinstance(value, dict) and "computed" in value and "error" in value:
-            yield name, value["computed"], value["reference"], value["error"]
+            yield name, value
+
+
+def _measure_line(name: str, m: dict) -> str:
+    """One measure on the command line: a value against its reference (and its error), or
+    against the bound it must reach."""
+    computed, reference = m["computed"], m["reference"]
+    if computed is None:
+        return f"  {name:<26} not reached; reference {reference:.5g}"
+    verdict = "" if m.get("passed") is None else ("  pass" if m["passed"] else "  FAIL")
+    if m.get("bound") == "lower":
+        return f"  {name:<26} computed {computed:<12.5g} at least  {reference:<12.5g}{verdict}"
+    error = m["error"]
+    return f"  {name:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}{verdict}"
 
 
 def _print_phase(name: str, phase: dict, directory) -> None:
@@ -36,11 +49,8 @@ def _print_phase(name: str, phase: dict, directory) -> None:
         f"  mesh {run['mesh']} ({run['dofs']} dofs) on {run['ranks']} rank(s): {run['steps']} steps, "
         f"{run['newton_iterations']} Newton iterations, {run['wall_time']:.1f} s; results in {directory}"
     )
-    for name_, computed, reference, error in _entries(phase["measures"]):
-        if computed is None:
-            echo(f"  {name_:<26} not reached; reference {reference:.5g}")
-        else:
-            echo(f"  {name_:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}")
+    for name_, measure in _entries(phase["measures"]):
+        echo(_measure_line(name_, measure))
     if name == "payout":
         for key, value in phase["measures"].items():
             if isinstance(value, dict) and value.get("max_error") is not None:

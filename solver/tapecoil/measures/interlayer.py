@@ -1,0 +1,137 @@
+"""The pressure between the turns of a stowed coil and the hub's radial reaction, checked by statics.
+
+With the turns' real contact the pressure between them is a result: the contact's forces
+across each interface between turn k - 1 and turn k (the hub for k = 0), summed over both
+passes of the two-sided contact, are F_k (the force across the interface, the pressure times
+its area). A turn is a ring in radial equilibrium under the pressures on its faces and its own
+axial force N (a membrane's equilibrium; the bending moment of a turn of constant curvature
+adds nothing), so per unit angle b (p_inner r_inner - p_outer r_outer) = N, and over the turn
+
+    F_k - F_{k+1} = integral of N over the turn's angle = 2 pi <N>_k.
+
+Statics predicts the jumps from N alone, read from the turn's strains
+(:class:`~tapecoil.measures.section_forces.SectionForces`), without the contact's help; the
+hub carries the sum, F_0 = the integral of N over the whole wound angle (less what the root's
+attachment carries). Wound-roll mechanics (Altmann 1968, Hakiel 1987) state the same for a roll
+of frictionless layers; methods notes.
+
+The inner turns are those wound completely with a complete turn above them: the first turn
+is left out (the root's attachment holds it), and so is the outer one (the lift-off).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from mpi4py import MPI
+
+from tapecoil.measures.measure import Measure
+
+if TYPE_CHECKING:
+    from tapecoil.phases.tape_on_hub import TapeOnHub
+
+# the statics of a ring holds the jumps to the contact's resolution of the pressure, which the
+# penalty spreads over the nodes: 5 % of a jump
+JUMP_TOLERANCE = 0.05
+
+
+def interface_forces(
+    node_turn: np.ndarray, cell_turn: np.ndarray, force: np.ndarray, turns: int
+) -> np.ndarray:
+    """The normal force across each interface between turns (``turns`` + 1 of them: k between
+    turn k - 1 and turn k) from contact pairs: each pair's node on turn ``node_turn``, its
+    partner cell on turn ``cell_turn``, the force's magnitude ``force`` [N]; pairs between
+    turns that are not neighbours add nothing."""
+    out = np.zeros(turns + 1)
+    across = np.abs(node_turn - cell_turn) == 1
+    interface = np.maximum(node_turn, cell_turn)[across]
+    inside = (interface >= 0) & (interface <= turns)
+    np.add.at(out, interface[inside], np.abs(force[across][inside]))
+    return out
+
+
+def turn_axial_force(psi: np.ndarray, axial_force: np.ndarray, turns: int) -> np.ndarray:
+    """The mean axial force [N] over each turn's winding angle, from N at points of winding
+    angle ``psi`` along the tape (sorted along it)."""
+    out = np.full(turns, math.nan)
+    for k in range(turns):
+        pick = (psi >= 2 * math.pi * k) & (psi < 2 * math.pi * (k + 1))
+        if pick.sum() >= 2:
+            out[k] = np.trapezoid(axial_force[pick], psi[pick]) / np.ptp(psi[pick])
+    return out
+
+
+def interlayer_measures(
+    forces: np.ndarray, hub_reaction: float, turn_force: np.ndarray, wound_integral: float
+) -> dict:
+    """The measures of the interlayer pressure: ``forces`` (K + 1,) the forces across the turns'
+    interfaces (k >= 1; ``forces[0]`` is ignored for the hub's ``hub_reaction``, its radial
+    force on the tape [N]), ``turn_force`` (K,) each complete turn's mean axial force [N],
+    ``wound_integral`` the integral of N over the whole wound angle [N rad]."""
+    F = np.array(forces, dtype=float)
+    F[0] = hub_reaction
+    turns = len(turn_force)
+    inner = list(range(1, turns - 1))
+    out: dict = {
+        "interface_forces": F.tolist(),
+        "turn_axial_force": [None if math.isnan(v) else float(v) for v in turn_force],
+    }
+    ratios = [(F[k] - F[k + 1]) / (2 * math.pi * turn_force[k]) for k in inner]
+    if ratios:
+        worst = int(np.argmax(np.abs(np.array(ratios) - 1.0)))
+        out["pressure_jump"] = Measure(
+            "pressure jump across an inner turn x its radius / its axial force (worst turn) [-]",
+            ratios[worst],
+            1.0,
+            JUMP_TOLERANCE,
+            "a ring's radial equilibrium, b (p_in r_in - p_out r_out) = N, with N read from the "
+            "turn's strains (frictionless turns of a wound roll)",
+            "the contact resolves the pressure at the nodes, which the penalty spreads; 5 % of a "
+            "jump, whose size is N / r",
+            extra={"turn": inner[worst], "ratios": [float(r) for r in ratios]},
+        ).to_dict()
+    if wound_integral > 0:
+        out["hub_reaction"] = Measure(
+            "hub's radial reaction / integral of N over the wound angle [-]",
+            hub_reaction / wound_integral,
+            1.0,
+            None,
+            "the hub carries the sum of the turns' jumps (statics of the turns)",
+            extra={
+                "hub_reaction_N": float(hub_reaction),
+                "note": "the root's attachment carries the first turn's share at the root",
+            },
+        ).to_dict()
+    return out
+
+
+def coil_interlayer(tape: TapeOnHub) -> dict | None:
+    """The interlayer measures of a full shell's coil at its current state (collective; None
+    without the turns' real contact, or with fewer than three complete turns)."""
+    if tape.turns is None:
+        return None
+    comm = tape.comm
+    contact = tape.contact
+    angle = tape.root.angle
+    turns = math.floor(angle / (2 * math.pi))
+    if turns < 3:
+        return None
+    surface = tape.turns.surface
+    psi_nodes = surface.gather(contact.psi.x.array[: surface.n_owned].copy())
+    node_turn = np.floor(psi_nodes / (2 * math.pi)).astype(np.int64)
+    pairs = tape.turns.pairs()
+    cells = tape.turns.self_contact.cells
+    local = interface_forces(node_turn[pairs.node], node_turn[cells[pairs.cell, 8]], pairs.force, turns + 1)
+    forces = comm.allreduce(local, op=MPI.SUM)
+    sections = tape.section_forces()
+    line = tape.centre_line()
+    psi_cut = np.interp(sections["xi1"], line["xi1"], line["psi"])
+    N = sections["axial_force"]
+    wound = psi_cut <= angle
+    order = np.argsort(psi_cut[wound])
+    wound_integral = float(np.trapezoid(N[wound][order], psi_cut[wound][order]))
+    return interlayer_measures(
+        forces, contact.radial_reaction(), turn_axial_force(psi_cut, N, turns), wound_integral
+    )
