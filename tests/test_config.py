@@ -113,10 +113,6 @@ def test_integer_accepted_for_float(tmp_path):
             r"model\.kind = 'hybrid' needs coiling\.sense = 'opposite'",
         ),
         (
-            {"model": {"kind": "hybrid"}, "contact": {"turns": "surface"}},
-            r"model\.kind = 'hybrid' needs contact\.turns = 'spiral'",
-        ),
-        (
             {"model": {"kind": "hybrid"}, "mesh": {"grading": 2.0}},
             r"model\.kind = 'hybrid' needs mesh\.grading = 1",
         ),

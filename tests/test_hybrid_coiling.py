@@ -113,9 +113,6 @@ def test_bad_hybrid_coilings_are_refused_before_anything_is_built():
     equal = dataclasses.replace(config, coiling=dataclasses.replace(config.coiling, sense="equal"))
     with pytest.raises(ValueError, match=r"coiling\.sense"):
         HybridCoiling(equal)
-    surface = dataclasses.replace(config, contact=dataclasses.replace(config.contact, turns="surface"))
-    with pytest.raises(ValueError, match=r"contact\.turns"):
-        HybridCoiling(surface)
     with pytest.raises(ValueError, match="shorter than the tape"):
         HybridCoiling(config, window=dataclasses.replace(WindowSettings.from_config(config.model), ahead=0.6))
     assert "opposite sense" in not_applicable("hybrid-coil", equal)

@@ -219,6 +219,21 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
                 "quantity": "radial step between turns / h",
             },
         ).to_dict()
+    if len(radii) and real_turns:
+        ideal = r_hub + h / 2 + h * np.arange(len(radii))
+        offsets = (radii - ideal) / h
+        worst = int(np.argmax(np.abs(offsets)))
+        out["turn_radius"] = Measure(
+            "each turn's mid-surface radius - (r_hub + h/2 + n h), worst turn / h [-]",
+            offsets[worst],
+            0.0,
+            0.2,
+            "turns one thickness apart on the hub (Sec. 2)",
+            "a prediction of the contact of the real surfaces, read half a turn from the root: the "
+            "penalty's penetration and the fairing over the root's end, a fifth of h",
+            absolute=True,
+            extra={"turn": worst, "offsets": [float(v) for v in offsets]},
+        ).to_dict()
     out["first_turn_radius"] = (
         Measure(
             "mid-surface radius of the first turn [m]",
