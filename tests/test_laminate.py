@@ -107,6 +107,7 @@ def test_formulas_of_an_isotropic_wall_are_the_isotropic_ones():
     )
     assert th.coil_energy_at_R(b, R) == pytest.approx(th.opposite_sense_energy_density(D, nu, R))
     assert th.fold_moment(b, alpha) == pytest.approx((1 + nu) * D * alpha)
+    assert th.fold_moment(b, alpha, "equal") == pytest.approx((1 - nu) * D * alpha)
     assert th.fold_radius(b, R) == pytest.approx(R)
 
 
@@ -123,6 +124,14 @@ def test_fold_radius_and_plateau_minimise_the_fold_energy():
     assert best.x == pytest.approx(th.fold_radius(bending, R), rel=1e-4)
     assert best.fun == pytest.approx(th.fold_moment(bending, alpha), rel=1e-8)
     assert th.fold_radius(bending, R) == pytest.approx(R * math.sqrt(bending.D11 / bending.D22))
+    # the equal sense: the same minimum with w's coupling term of the other sign
+    best = minimize_scalar(
+        lambda rho: R * alpha * th.energy_density(rho, R, bending, "equal") * rho,
+        bounds=(0.2 * R, 20 * R),
+        method="bounded",
+    )
+    assert best.x == pytest.approx(th.fold_radius(bending, R), rel=1e-4)
+    assert best.fun == pytest.approx(th.fold_moment(bending, alpha, "equal"), rel=1e-8)
 
 
 @pytest.mark.parametrize("sense", ["opposite", "equal"])

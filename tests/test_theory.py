@@ -288,6 +288,8 @@ def test_ploy_length_section_7(cfg):
 def test_fold_moment_and_section(cfg):
     tp = cfg.tape
     assert close(th.fold_moment(BENDING, tp.alpha), 36.5e-3)
+    # (1 - nu) D alpha = 0.7 x 0.011905 x 2.3562 (physics brief Sec. 1)
+    assert close(th.fold_moment(BENDING, tp.alpha, "equal"), 19.64e-3)
     # the thin-arc second moment against direct integration over the arc (centroidal axis)
     beta = tp.alpha / 2
     ybar = quad(lambda t: tp.R * math.cos(t), -beta, beta)[0] / tp.alpha

@@ -17,6 +17,7 @@ import sys
 import warnings
 
 from tapecoil import __version__
+from tapecoil.app.commands.fold import cmd_fold
 from tapecoil.app.commands.info import cmd_config, cmd_theory
 from tapecoil.app.commands.mesh import cmd_mesh
 from tapecoil.app.commands.runs import cmd_coil, cmd_deploy, cmd_payout, cmd_report, cmd_run, cmd_sweep
@@ -60,7 +61,33 @@ def build_parser() -> argparse.ArgumentParser:
         help="mesh preset (default: each case's coarsest that passes: default for tape-fold, else coarse)",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument(
+        "--out",
+        help="directory of the curves the path cases write, CSV and PNG: roof-*, tape-moment-rotation "
+        "(default: <output.directory>/verify)",
+    )
     p.set_defaults(func=cmd_verify)
+
+    p = sub.add_parser(
+        "fold",
+        help="a tape spring's moment-rotation curve in both senses: stable and unstable branches, "
+        "peak moments, snaps, steady fold moments (arc length)",
+    )
+    p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")
+    p.add_argument(
+        "--mesh",
+        choices=("coarse", "default", "fine"),
+        default="coarse",
+        help="mesh preset (default: coarse)",
+    )
+    p.add_argument("--out", help="results directory (default: <output.directory>/fold)")
+    p.add_argument("--angle", type=float, help="end rotation to fold to [rad], in (0, pi] (default: 2)")
+    p.add_argument(
+        "--length", type=float, help="length of the tape bent [m] (default: the tape's, at most 20 R)"
+    )
+    p.add_argument("--sense", choices=("opposite", "equal", "both"), default="both", help="bending sense")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=cmd_fold)
 
     p = sub.add_parser("coil", help="coil the tape onto the hub to the stowed state (quasi-static)")
     p.add_argument("config", nargs="?", help="TOML configuration (default: the benchmark tape)")

@@ -72,6 +72,11 @@ def check_model(config) -> None:
     need = hybrid_need(config)
     if need is not None:
         raise ConfigError(f"model.kind = 'hybrid' needs {need}")
+    if config.solver.stability:
+        raise ConfigError(
+            "solver.stability = true judges the shell model's coiling, not the hybrid's: set "
+            "model.kind = 'shell', or leave solver.stability out"
+        )
     window = model.window_ahead + model.window_behind
     if window >= config.tape.L:
         raise ConfigError(

@@ -170,6 +170,11 @@ class SolverConfig:
             {snes_monitor = "", mat_mumps_icntl_14 = 50}; [coiling] and [deployment]
             petsc_options override them for their phase, the command line overrides both
             (-coil_snes_monitor, -deploy_..., -verify_<case>_..., the case's dashes as underscores).
+        stability: judge the stability of a coiling's converged states: the lowest eigenvalue
+            of the tangent stiffness with its supports (the hub held) and the count of negative
+            ones in every history row, the stowed coil's lowest eigenvalues in the summary, with
+            the hub held and with it free under the torque that holds it (docs/stability.md:
+            what it costs, what it leaves out). The shell model's coiling only [-].
     """
 
     rtol: float = param(1e-8, "-", Range(0.0, 1.0, True, True))
@@ -180,6 +185,7 @@ class SolverConfig:
     cutback: float = param(0.5, "-", Range(0.0, 1.0, True, True))
     max_cutbacks: int = param(0, "-", Range(0, 100))
     petsc_options: dict = param({}, "")
+    stability: bool = param(False, "")
 
     def control(
         self,

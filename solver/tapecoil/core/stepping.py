@@ -174,6 +174,15 @@ class Continuation:
             relax.coefficient.value = 0.0
         return False, total
 
+    def settle(self, load: float) -> tuple[bool, int]:
+        """Pseudo-transient relaxation at the fixed ``load`` from the state in place (set off an
+        unstable equilibrium) down to a stable one: the fall through a snap under a load held.
+        Returns (converged, Newton iterations); on failure the state is the last relaxed one.
+        Needs ``relaxation``."""
+        if self.relaxation is None:
+            raise ValueError("settle: the continuation has no relaxation")
+        return self._relax(load)
+
     def _error_factor(self, error: float) -> float:
         """The factor on the step that brings ``error`` (over its tolerance) to 0.9, within [1/5, grow]."""
         if error <= 0.0:

@@ -11,6 +11,7 @@ from tapecoil.core.stepping import StepRecord
 from tapecoil.measures.deployment import lift_off
 from tapecoil.measures.payout import OUTER_TURN_COLUMNS, outer_turn_tension
 from tapecoil.measures.section_forces import SectionForces
+from tapecoil.phases.step_stability import StepStability
 
 
 class CoilingRows:
@@ -24,6 +25,8 @@ class CoilingRows:
         self.m = model
         self.last_potential = None
         self.sections = SectionForces(model.model, model.tape.contact.nodes, model.comm)
+        # [solver] stability: each row's state judged (its columns added last)
+        self.stability = StepStability(model.solver) if model.config.solver.stability else None
 
     def row(self, phase: str, load: float, step: StepRecord) -> dict:
         """The row of the state ``step`` reached at ``load`` of ``phase`` ("flatten" or "coil"),
@@ -79,4 +82,5 @@ class CoilingRows:
             # the deployed fraction by the deployment's definition (measures.deployment.lift_off)
             "lambda": lam,
             **outer,
+            **(self.stability.judge() if self.stability is not None else {}),
         }

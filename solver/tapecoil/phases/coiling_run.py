@@ -264,7 +264,10 @@ class CoilingPhase(HubTurningPhase):
         torque = hub_torque_measure(self.history)
         if torque is not None:
             measures["hub_torque"] = torque
-        return self.coiling_summary(interrupted, t_start, measures)
+        summary = self.coiling_summary(interrupted, t_start, measures)
+        if self.run.rows.stability is not None:
+            summary["stability"] = self.run.rows.stability.summary(self.history)
+        return summary
 
 
 def write_coiled_cells(model: CoilingModel, directory: Path) -> dict:

@@ -50,7 +50,12 @@ from tapecoil.theory.deployment import (
     solve_deployment_ode,
     stowed_rotary_inertia,
 )
-from tapecoil.theory.edge_layer import EdgeLayer, coiling_tension_with_edges, edge_layer
+from tapecoil.theory.edge_layer import (
+    EdgeLayer,
+    coiling_tension_with_edges,
+    edge_layer,
+    fold_moment_with_edges,
+)
 from tapecoil.theory.laminate import Bending, Wall, plane_stress_stiffness, ply_stiffness
 from tapecoil.theory.plate import (
     SENSES,
@@ -94,6 +99,7 @@ __all__ = [
     "energy_density",
     "flexural_rigidity",
     "fold_moment",
+    "fold_moment_with_edges",
     "fold_radius",
     "free_hub_factors",
     "max_hub_angle",

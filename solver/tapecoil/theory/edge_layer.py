@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 from tapecoil.theory.coiling_tension import coiling_tension_bending
 from tapecoil.theory.laminate import Bending
+from tapecoil.theory.plate import energy_density, sense_sign
 
 
 @dataclass(frozen=True)
@@ -87,19 +88,23 @@ class EdgeLayer:
         return (1.5 * m**2 - 2 * self.D12 * m / self.rho) / (self.D22 * self.beta)
 
 
-def edge_layer(bending: Bending, axial_stiffness: float, R: float, rho: float) -> EdgeLayer:
-    """The edge layer of a flattened opposite-sense coil of mid-surface radius ``rho`` [m].
+def edge_layer(
+    bending: Bending, axial_stiffness: float, R: float, rho: float, sense: str = "opposite"
+) -> EdgeLayer:
+    """The edge layer of a flattened coil of mid-surface radius ``rho`` [m], of the coiling
+    ``sense``.
 
     ``bending``: the wall's rigidities (D22, D12 enter); ``axial_stiffness``: S [N/m], the
     force per unit width that stretches the wall along the tape by a unit strain with its width
     free to contract (:attr:`Wall.axial_stiffness`: E h for an isotropic wall); ``R``: the
-    section's radius [m].
+    section's radius [m]. In the equal sense the coil's curvature couples to the flattening with
+    the other sign: M0 = D22/R - D12/rho (in magnitude).
     """
     if rho <= 0 or R <= 0 or axial_stiffness <= 0:
         raise ValueError(
             f"edge_layer needs rho, R and the axial stiffness > 0 (got {rho}, {R}, {axial_stiffness})"
         )
-    moment = bending.D22 / R + bending.D12 / rho
+    moment = bending.D22 / R + sense_sign(sense) * bending.D12 / rho
     beta = (axial_stiffness / (4 * bending.D22)) ** 0.25 / math.sqrt(rho)
     return EdgeLayer(moment, beta, bending.D22, bending.D12, rho)
 
@@ -114,3 +119,26 @@ def coiling_tension_with_edges(
         coiling_tension_bending(bending, alpha, R, rho)
         + edge_layer(bending, axial_stiffness, R, rho).tension_rise
     )
+
+
+def fold_moment_with_edges(
+    bending: Bending, axial_stiffness: float, alpha: float, R: float, sense: str = "opposite"
+) -> float:
+    """The steady moment of a localised fold [N m] with its free edges' layers: the minimum
+    over the fold radius rho of rho (b w(rho) - Delta U(rho)), b = R alpha, the plate's energy
+    per unit length less what the two edge layers relieve (:attr:`EdgeLayer.energy_relief`),
+    where :func:`~tapecoil.theory.plate.fold_moment` minimises rho b w(rho) alone. Below that
+    plate form by about (1 +- nu) / (alpha R beta) of it, beta at rho = R: a few per cent for
+    a thin tape of a narrow section."""
+    from scipy.optimize import minimize_scalar
+
+    b = R * alpha
+
+    def per_radian(rho: float) -> float:
+        relief = edge_layer(bending, axial_stiffness, R, rho, sense).energy_relief
+        return rho * (b * energy_density(rho, R, bending, sense) - relief)
+
+    best = minimize_scalar(
+        per_radian, bounds=(0.2 * R, 5.0 * R), method="bounded", options={"xatol": 1e-10 * R}
+    )
+    return float(best.fun)

@@ -72,15 +72,18 @@ def arc_second_moment(R: float, alpha: float, h: float) -> float:
     return R**3 * h * (beta + s * c - 2 * s * s / beta) + R * alpha * h**3 / 12
 
 
-def fold_moment(bending: Bending, alpha: float) -> float:
-    """Steady moment of a localised opposite-sense fold, alpha (sqrt(D11 D22) + D12) [N m].
+def fold_moment(bending: Bending, alpha: float, sense: str = "opposite") -> float:
+    """Steady moment of a localised fold, alpha (sqrt(D11 D22) +- D12) [N m], + in the opposite
+    sense, - in the equal sense.
 
-    Wuest (1954); Seffen and Pellegrino (1999): (1 + nu) D alpha for an isotropic wall; the
-    orthotropic form minimises w(rho) rho over the fold radius (physics brief Sec. 10). It is
-    the moment plateau after the snap when a tape is bent so that its cross-section flattens.
+    Wuest (1954); Seffen and Pellegrino (1999): (1 + nu) D alpha and (1 - nu) D alpha for an
+    isotropic wall (in magnitude). A fold of radius rho turned by an angle stores b w(rho) rho
+    per radian, w of either sense (:func:`energy_density`); its minimum over rho, at
+    R sqrt(D11 / D22) in both senses, is the moment (physics brief Sec. 10). It is the moment
+    plateau after the snap when a tape is bent so that its cross-section flattens.
     """
     d = bending
-    return alpha * (math.sqrt(d.D11 * d.D22) + d.D12)
+    return alpha * (math.sqrt(d.D11 * d.D22) + sense_sign(sense) * d.D12)
 
 
 def fold_radius(bending: Bending, R: float) -> float:

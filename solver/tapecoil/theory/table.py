@@ -107,6 +107,13 @@ def predictions(config: Config) -> list[Prediction]:
             "Wuest 1954; physics brief Sec. 10",
         ),
         P(
+            "fold_moment_equal",
+            "fold moment plateau, equal sense, alpha (sqrt(D11 D22) - D12)",
+            fold_moment(bending, tp.alpha, "equal"),
+            "N m",
+            "Seffen and Pellegrino 1999; physics brief Sec. 10",
+        ),
+        P(
             "fold_radius",
             "fold radius R sqrt(D11 / D22)",
             fold_radius(bending, tp.R),

@@ -24,6 +24,7 @@ CASES = (
     "hybrid-deploy",
     "roof-snap-through",
     "roof-snap-back",
+    "tape-moment-rotation",
 )
 
 

@@ -26,6 +26,7 @@ from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, h
 from tapecoil.verification.hybrid_coil import hybrid_coil
 from tapecoil.verification.hybrid_deploy import hybrid_deploy
 from tapecoil.verification.hybrid_motion import hybrid_vibration
+from tapecoil.verification.moment_rotation import tape_moment_rotation
 from tapecoil.verification.roof import ROOF_MESHES, roof
 from tapecoil.verification.sze import (
     CANTILEVER_MESHES,
@@ -73,6 +74,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = roof(12.7, ROOF_MESHES[preset], comm=comm, solver_config=config.solver)
     elif name == "roof-snap-back":
         result = roof(6.35, ROOF_MESHES[preset], comm=comm, solver_config=config.solver)
+    elif name == "tape-moment-rotation":
+        result = tape_moment_rotation(config, preset, comm)  # on meshes of its own (FOLD_MESHES)
     elif name == "beam-rollup":
         result = beam_rollup(BEAM_MESHES[preset], comm=comm)
     elif name == "beam-bend45":

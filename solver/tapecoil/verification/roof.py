@@ -113,6 +113,7 @@ def roof_curve(
     finally:
         path.destroy()
     return {
+        "thickness": h,
         "curve": curve,
         "critical": critical,
         "steps": len(path.points) - 1,

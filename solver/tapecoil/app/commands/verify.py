@@ -43,6 +43,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
             continue
         result.info["case_wall_time"] = time.perf_counter() - t0
         results.append(result)
+        files = case_files(result, args.out or f"{config.output.directory}/verify") if rank() == 0 else []
         if not args.json:
             mesh, wall = result.info.get("mesh", ""), result.info["case_wall_time"]
             echo(f"{name} ({result.info['preset']} mesh, {mesh}, {wall:.1f} s)")
@@ -52,6 +53,10 @@ def cmd_verify(args: argparse.Namespace) -> int:
                     f"  {c.name:<40} computed {c.computed:<12.6g} reference {c.reference:<10.6g} "
                     f"error {err:<13} tol {c.tolerance:g}  {'PASS' if c.passed else 'FAIL'}"
                 )
+            for what, value in result.info.get("predictions", ()):
+                echo(f"  {what:<40} computed {value:<12.6g} (a prediction: no reference)")
+            for path in files:
+                echo(f"  wrote {path}")
     if args.json:
         payload = [
             {
@@ -76,3 +81,24 @@ def cmd_verify(args: argparse.Namespace) -> int:
         payload += [{"case": name, "passed": False, "stopped": reason} for name, reason in stopped.items()]
         echo(json.dumps(payload, indent=2, default=float))
     return 0 if all(r.passed for r in results) and not stopped else 1
+
+
+def case_files(result, directory) -> list:
+    """The curves of a case that follows a path, as a CSV and a plot into ``directory`` (the
+    roof's load-deflection, the tape's moment-rotation); none for the other cases. Serial."""
+    from pathlib import Path
+
+    directory = Path(directory)
+    if result.case == "tape-moment-rotation":
+        from tapecoil.post.paths import moment_rotation_files
+
+        return moment_rotation_files(
+            result.info["senses"], directory, f"{result.case} ({result.info['mesh']})"
+        )
+    if result.case.startswith("roof-"):
+        from tapecoil.post.paths import roof_files
+        from tapecoil.verification.roof import SZE_PMAX, SZE_ROOF_LIMIT
+
+        ratio, w = SZE_ROOF_LIMIT[result.info["thickness"]]
+        return roof_files(result.case, result.info, (ratio * SZE_PMAX, w), directory)
+    return []
