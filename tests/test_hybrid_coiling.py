@@ -40,6 +40,7 @@ def coiled(comm, angle: float) -> HybridCoiling:
     return _COILED[key]
 
 
+@pytest.mark.slow
 def test_the_hybrid_coils_the_benchmark_as_the_full_shell_does():
     """``hybrid-coil`` (coarse, 5 rad, the window moved off the root once): the strain energy
     within 0.5 % of the full shell's (measured 0.057 %), the coiled length within 0.5 % (0.078 %),
@@ -287,6 +288,7 @@ def hybrid_run_config(angle: float) -> Config:
     )
 
 
+@pytest.mark.slow
 def test_a_stopped_hybrid_coiling_goes_on_from_its_checkpoint_as_if_never_stopped(tmp_path):
     """The coarse tape's coiling to 4.5 rad by the hybrid in a run, stopped after 60 steps (past
     the window's move off the root at 3.9 rad, in the middle of a leg between moves) and resumed

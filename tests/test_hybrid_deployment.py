@@ -517,6 +517,7 @@ def tape_inertia(config) -> float:
     return theory.stowed_rotary_inertia(config.hub.radius, tp.h, tp.L, tp.rho_l)
 
 
+@pytest.mark.slow
 def test_a_free_hub_turns_back_under_the_hybrid_as_under_the_full_shell():
     """The coarse 4.5 rad coil on a hub of 25 times the tape's own rotary inertia, free from
     release, deployed for 5 ms by the hybrid (the hub's equation solved with the shell's and the

@@ -51,6 +51,7 @@ def at_angles(h: dict, key: str, angles: np.ndarray) -> np.ndarray:
     return np.interp(angles, h["hub_angle"][::-1], h[key][::-1])
 
 
+@pytest.mark.slow
 def test_the_hybrid_pays_out_as_the_full_shell_does(paid_out):
     """Coarse benchmark tape, 6 rad paid out to lambda = 0.9 by each model from its own coil.
     Side by side at the hybrid's hub angles: the strain energy within 0.5 % (measured 0.09 % at
@@ -75,6 +76,7 @@ def test_the_hybrid_pays_out_as_the_full_shell_does(paid_out):
     assert hybrid["payout"]["run"]["dofs"] < shell["payout"]["run"]["dofs"]
 
 
+@pytest.mark.slow
 def test_the_hybrid_payouts_window_follows_the_lift_off_to_the_root(paid_out):
     """The window moves back as the lift-off runs down the coil: its start falls move by move
     to the root, the flattened beam on the coil becoming shell, and the shell keeps
@@ -94,6 +96,7 @@ def test_the_hybrid_payouts_window_follows_the_lift_off_to_the_root(paid_out):
     assert np.min(h["coiled_length"] - h["window_start"]) >= config.model.window_behind - 1e-9
 
 
+@pytest.mark.slow
 def test_a_payout_alone_starts_from_the_hybrids_stowed_coil(tmp_path, paid_out):
     """``tapecoil payout STOWED`` with the hybrid: the payout from a hybrid coiling's stowed
     checkpoint (the hybrid's state in its tables) is the payout of the run that coiled it, row
@@ -142,6 +145,7 @@ def test_the_payouts_pull_acts_on_the_hybrid():
     np.testing.assert_allclose(N[free], 1.5, rtol=0.01)
 
 
+@pytest.mark.slow
 @pytest.mark.mpi
 def test_two_ranks_pay_out_the_hybrid_as_one():
     """The coarse tape coiled by the hybrid to 6 rad and paid out to lambda = 0.88 (the window
@@ -169,6 +173,7 @@ def test_two_ranks_pay_out_the_hybrid_as_one():
     assert parallel.lift_off() == pytest.approx(serial.lift_off(), abs=1e-9 * config.tape.L)
 
 
+@pytest.mark.slow
 def test_a_stopped_hybrid_payout_goes_on_from_its_checkpoint_as_if_never_stopped(tmp_path, paid_out):
     """The hybrid's payout stopped after 30 steps (between its two moves back) and
     resumed from its checkpoint (paid_out/, the hybrid's tables beside the full shell) ends as

@@ -148,6 +148,7 @@ def test_loss_of_uniqueness_hub_folds_the_tape_and_needs_a_small_tension(loss_of
     assert release[-1] < release[0] and r["required_tension"] > release[-1]
 
 
+@pytest.mark.slow
 def test_a_hub_smaller_than_the_tape_radius_wraps_it_without_folds():
     """r_c/R = 0.6, bending-dominated: a fold (radius between R and r_c) cannot form on a hub
     smaller than R; let back, the coil loosens as a whole, and pulled, it closes on the hub
