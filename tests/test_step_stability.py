@@ -68,6 +68,26 @@ def test_coiling_rows_and_summary_carry_the_stability(tmp_path):
     assert stability["stable_hub_free"] == (stability["stable_hub_held"] and stability["hub_torque_rate"] > 0)
 
 
+def test_a_payouts_rows_carry_the_stability():
+    """A payout turns the hub back through the coiling's rows: the hub of the short coil turned
+    back by half a radian, each of its rows judged, the last against the dense spectrum."""
+    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling_run import CoilingRun
+    from tapecoil.phases.step_stability import COLUMNS
+
+    model = CoilingModel(short_coil_with_stability(), MPI.COMM_SELF)
+    run = CoilingRun(model)
+    run.flatten()
+    run.coil(1.0)
+    coiled = len(run.result.history)
+    run.coil(0.5, start_angle=model.root.angle)
+    back = run.result.history[coiled:]
+    assert back and float(back[-1]["hub_angle"]) == pytest.approx(0.5)
+    assert all(math.isfinite(row[COLUMNS[0]]) for row in back)
+    spectrum = dense_spectrum(model.solver)
+    assert back[-1][COLUMNS[0]] == pytest.approx(spectrum[np.argmin(np.abs(spectrum))], rel=1e-6)
+
+
 def test_stability_key_is_typed_and_refused_on_the_hybrid():
     assert config_from_dict({"solver": {"stability": True}}).solver.stability is True
     assert Config().solver.stability is False

@@ -74,7 +74,7 @@ def check_model(config) -> None:
         raise ConfigError(f"model.kind = 'hybrid' needs {need}")
     if config.solver.stability:
         raise ConfigError(
-            "solver.stability = true judges the shell model's coiling, not the hybrid's: set "
+            "solver.stability = true judges the shell model's coiling and payout, not the hybrid's: set "
             "model.kind = 'shell', or leave solver.stability out"
         )
     window = model.window_ahead + model.window_behind

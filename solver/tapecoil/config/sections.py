@@ -174,7 +174,7 @@ class SolverConfig:
             of the tangent stiffness with its supports (the hub held) and the count of negative
             ones in every history row, the stowed coil's lowest eigenvalues in the summary, with
             the hub held and with it free under the torque that holds it (docs/stability.md:
-            what it costs, what it leaves out). The shell model's coiling only [-].
+            what it costs, what it leaves out). The shell model's coiling and payout [-].
     """
 
     rtol: float = param(1e-8, "-", Range(0.0, 1.0, True, True))
