@@ -91,7 +91,7 @@ def test_a_payouts_rows_carry_the_stability():
 def test_stability_key_is_typed_and_refused_on_the_hybrid():
     assert config_from_dict({"solver": {"stability": True}}).solver.stability is True
     assert Config().solver.stability is False
-    with pytest.raises(ConfigError, match="solver.stability"):
+    with pytest.raises(ConfigError, match=r"solver\.stability"):
         config_from_dict({"solver": {"stability": "yes"}})
-    with pytest.raises(ConfigError, match="solver.stability = true judges the shell model"):
+    with pytest.raises(ConfigError, match=r"solver\.stability = true judges the shell model"):
         config_from_dict({"model": {"kind": "hybrid"}, "solver": {"stability": True}})

@@ -40,19 +40,7 @@ def shell_path(
     :meth:`ShellProblem.solve` makes it (``solver_config``'s tolerances are not used: the path's
     are ``settings``'); ``stability``: a :class:`~tapecoil.core.stability.StabilityAnalysis` for
     every converged state; ``load_range``: the loads the problem is defined for."""
-    config = solver_config or SolverConfig()
-    F, J = problem.forms()
-    solver = SNESSolver.from_config(
-        F,
-        J,
-        problem.model.q,
-        problem.bcs,
-        config,
-        prefix=prefix or f"{problem.name}_",
-        defaults=options,
-        state_scale=problem.model.rounding_scale(),
-    )
-    solver.point_forces.extend(problem.point_forces)
+    solver = problem.snes_solver(solver_config or SolverConfig(), prefix, options)
     system = _OwnedSolverSystem(solver, problem.set_load, load_range=load_range)
     return ArcLength(system, settings, stability=stability)
 

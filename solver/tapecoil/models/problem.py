@@ -195,6 +195,24 @@ class ShellProblem:
         F = self.model.residual(work)
         return F, self.model.jacobian_form(F)
 
+    def snes_solver(self, settings: SolverConfig, prefix: str | None = None, options: dict | None = None):
+        """The Newton solver of this problem's forms, Dirichlet conditions and point forces, with
+        the ``[solver]`` ``settings`` and the problem's own PETSc ``options`` under ``prefix``
+        (default: the problem's name). The caller destroys it."""
+        F, J = self.forms()
+        solver = SNESSolver.from_config(
+            F,
+            J,
+            self.model.q,
+            self.bcs,
+            settings,
+            prefix=prefix or f"{self.name}_",
+            defaults=options,
+            state_scale=self.model.rounding_scale(),
+        )
+        solver.point_forces.extend(self.point_forces)
+        return solver
+
     def solve(
         self,
         load: float,
@@ -227,18 +245,7 @@ class ShellProblem:
                 f"<= load ({load})"
             )
         settings = solver_config or SolverConfig()
-        F, J = self.forms()
-        solver = SNESSolver.from_config(
-            F,
-            J,
-            self.model.q,
-            self.bcs,
-            settings,
-            prefix=prefix or f"{self.name}_",
-            defaults=options,
-            state_scale=self.model.rounding_scale(),
-        )
-        solver.point_forces.extend(self.point_forces)
+        solver = self.snes_solver(settings, prefix, options)
         smallest = 1e-6 * load if min_step is None else min_step
         control = settings.control(
             initial_step=first_step / load, max_step=max_step / load, min_step=smallest / load

@@ -65,7 +65,12 @@ def moment_rotation_files(curves: dict, directory: Path, title: str = "") -> lis
         rows,
     )
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
-    snaps = [k["rotation"] for c in curves.values() for k in c["critical"] if k.get("branch", "primary") == "primary"]
+    snaps = [
+        k["rotation"]
+        for c in curves.values()
+        for k in c["critical"]
+        if k.get("branch", "primary") == "primary"
+    ]
     for sense, c in curves.items():
         colour = SENSE_COLOURS.get(sense, "k")
         ref = c["fold_moment_reference"]
@@ -94,7 +99,9 @@ def moment_rotation_files(curves: dict, directory: Path, title: str = "") -> lis
     axes[0].set_title("around the snaps")
     axes[0].set_ylabel("moment M [N m]")
     axes[1].set_ylim(0.0, 2.0)
-    axes[1].set_title("M over alpha (sqrt(D11 D22) +- D12): dotted 1, dashed with the edge layers", fontsize=9)
+    axes[1].set_title(
+        "M over alpha (sqrt(D11 D22) +- D12): dotted 1, dashed with the edge layers", fontsize=9
+    )
     axes[1].set_ylabel("M / fold moment [-]")
     for ax in axes:
         ax.set_xlabel("end rotation phi [rad]")
