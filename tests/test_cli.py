@@ -258,7 +258,8 @@ def _tapecoil(*args, **kwargs):
 @pytest.mark.parametrize(
     ("phase", "after", "run"),
     [
-        ("coiling", 3, SHORT_RUN),
+        # the coiling's restart is also tests/test_coiling.py's, without the signal: make validate
+        pytest.param("coiling", 3, SHORT_RUN, marks=pytest.mark.slow),
         ("deployment", 5, SHORT_RUN),
         # the free hub's restart state on top of the fixed hub's: make validate
         pytest.param("deployment", 5, FREE_HUB_RUN, marks=pytest.mark.slow),

@@ -119,6 +119,7 @@ def test_bad_hybrid_coilings_are_refused_before_anything_is_built():
     assert "opposite sense" in not_applicable("hybrid-coil", equal)
 
 
+@pytest.mark.slow
 @pytest.mark.mpi
 def test_two_ranks_coil_the_hybrid_as_one():
     """The hybrid coiled on 2 ranks and on each alone past its first window move: the same

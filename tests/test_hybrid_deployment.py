@@ -227,6 +227,7 @@ def test_a_coil_the_window_never_left_is_not_deployed_by_the_hybrid():
         HybridDeployment(coiling)
 
 
+@pytest.mark.slow
 def test_the_release_starts_from_rest():
     """The coarse 4.5 rad coil, whose window grows at release from the coiling's (to 0.25 m) to
     the free end, held for the first millisecond of the release: the tape stays at rest, its

@@ -125,6 +125,7 @@ def test_a_payout_alone_starts_from_the_hybrids_stowed_coil(tmp_path, paid_out):
     assert not (tmp_path / "refused" / "payout_history.csv").exists()
 
 
+@pytest.mark.slow
 def test_the_payouts_pull_acts_on_the_hybrid():
     """``payout.tension`` acts: the coarse tape coiled by the hybrid to 6 rad with the coiling's
     pull (1 N), then turned back by 0.5 rad with 1.5 N, carries 1.5 N in its free part: the arc

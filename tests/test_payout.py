@@ -73,6 +73,7 @@ def paid_out(tmp_path_factory):
     return directory, summary
 
 
+@pytest.mark.slow
 def test_payout_turns_the_hub_back_to_the_deployed_fraction(paid_out):
     from tapecoil import theory
 
@@ -111,6 +112,7 @@ def test_payout_turns_the_hub_back_to_the_deployed_fraction(paid_out):
     assert json.loads((directory / "summary.json").read_text())["payout"]["completed"]
 
 
+@pytest.mark.slow
 def test_payout_hub_torque_is_steady_coilings(paid_out):
     """The hub torque read from the root's reactions (not from the energy balance) against steady
     coiling rho (T + b w(rho)), the energy balance of a step with rho the outer turn's measured
@@ -122,6 +124,7 @@ def test_payout_hub_torque_is_steady_coilings(paid_out):
     assert measure["max_error"] < 0.05
 
 
+@pytest.mark.slow
 def test_payout_figure_is_drawn(paid_out):
     from tapecoil.post.plots import payout_forces
 

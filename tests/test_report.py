@@ -187,6 +187,7 @@ def test_report_ties_numbers_and_pictures_together(run_dir):
         assert cells[6] == marks[row["passed"]], row["label"]
 
 
+@pytest.mark.slow
 def test_report_command_remakes_the_report(run_dir, capsys):
     from tapecoil.app.cli import main
 

@@ -130,6 +130,7 @@ def loss_of_uniqueness():
     return _wrap(2.0)
 
 
+@pytest.mark.slow
 def test_loss_of_uniqueness_hub_folds_the_tape_and_needs_a_small_tension(loss_of_uniqueness):
     """r_c/R = 2: Wilson et al. (2020) see localised folds of radius between R and r_c and a
     tension near zero; the study must find one fold or more in that range and a required
