@@ -86,10 +86,14 @@ if rank0:
                 f"{r['wall_time']:.0f} s on {r['ranks']} rank(s), {r['dofs']} dofs"
             )
     for row in summary["validation"]:
-        error = "-" if row["error"] is None else f"{row['error']:.2%}"
-        tolerance = "reported" if row["tolerance"] is None else f"tolerance {100 * row['tolerance']:g}%"
         mark = {True: "pass", False: "FAIL", None: ""}[row["passed"]]
         computed = "not reached" if row["computed"] is None else f"{row['computed']:.5g}"
+        if row["bound"] == "lower":  # a value that must reach a bound (a separation), or a reading
+            against = "reported" if row["tolerance"] is None else f"at least {row['reference']:g}"
+            print(f"  {row['label']:<66} {computed:>12} {against} {mark}")
+            continue
+        error = "-" if row["error"] is None else f"{row['error']:.2%}"
+        tolerance = "reported" if row["tolerance"] is None else f"tolerance {100 * row['tolerance']:g}%"
         print(
             f"  {row['label']:<66} {computed:>12} vs {row['reference']:<10.5g} {error:>7} {tolerance} {mark}"
         )

@@ -2,6 +2,8 @@
 
 import math
 
+import pytest
+
 from tapecoil.measures.measure import Measure, is_measure, validation_rows
 
 
@@ -34,3 +36,19 @@ def test_rows_come_from_the_measures_in_order_and_nothing_else():
     assert [r["quantity"] for r in rows] == ["b", "a"]
     assert rows[0]["passed"] is True and rows[1]["passed"] is None and rows[1]["tolerance"] is None
     assert measures["b"]["worst"] == 2.5 and is_measure(measures["b"]) and not is_measure(measures["profile"])
+
+
+def test_a_bound_is_held_or_read():
+    """A lower bound: the shortfall below it is the error, held to 0; without a tolerance the
+    value is a reading, reported without a pass mark; the command line says which."""
+    from tapecoil.app.commands.runs import _measure_line
+
+    held = Measure("separation / h [-]", 0.7, 0.9, 0.0, bound="lower")
+    assert held.error == pytest.approx(0.2) and held.passed is False
+    assert Measure("separation / h [-]", 0.95, 0.9, 0.0, bound="lower").passed is True
+    read = Measure("separation / h [-]", 0.7, 0.9, None, bound="lower").to_dict()
+    assert read["passed"] is None and read["bound"] == "lower"
+    with pytest.raises(ValueError, match="tolerance is 0"):
+        Measure("separation / h [-]", 0.7, 0.9, 0.1, bound="lower")
+    assert "at least" in _measure_line("closest_turns", held.to_dict())
+    assert _measure_line("closest_turns", read).split()[-1] == "reported"

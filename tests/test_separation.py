@@ -25,7 +25,9 @@ from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.separation import (
     material_coordinate,
     quad9_cells,
+    separation_bound,
     separation_history,
+    separation_measure,
     turn_separation,
 )
 
@@ -223,6 +225,19 @@ def test_history_of_a_results_directory(tmp_path, sense):
     assert hist.global_minimum == pytest.approx(0.5, abs=TOL)
     assert hist.percentiles[1.0][1] == pytest.approx(1.0, abs=TOL)
     assert len(separation_history(tmp_path, "coiling", every=2).t) == 3  # 0, 2 and the last
+    # on the spiral obstacle the separation is a reading, reported without the bound that the
+    # turns' real contact must keep; with the real contact, the half thickness fails it
+    reading = separation_measure(tmp_path, "coiling")
+    bound, _ = separation_bound(load_config(tmp_path / "config.toml"))
+    assert reading["computed"] == pytest.approx(0.5, abs=TOL)
+    assert reading["bound"] == "lower" and reading["reference"] == bound
+    assert reading["tolerance"] is None and reading["passed"] is None
+    config = load_config(tmp_path / "config.toml")
+    config.contact.turns = "surface"
+    (tmp_path / "config.toml").write_text(to_toml(config))
+    held = separation_measure(tmp_path, "coiling")
+    assert held["tolerance"] == 0.0 and held["passed"] is False
+    assert held["error"] == pytest.approx(bound - 0.5, abs=TOL)
 
 
 def test_default_mesh_size_coil():

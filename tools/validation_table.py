@@ -118,10 +118,10 @@ def percent(value: float) -> str:
 
 
 def tolerance_text(row: dict) -> str:
-    if row["measure"].get("bound") == "lower":
-        return "at least the reference"
     if row["tolerance"] is None:
         return "none (reported)"
+    if row["measure"].get("bound") == "lower":
+        return "at least the reference"
     if row["measure"].get("absolute"):
         return compact(f"{row['tolerance']:g}")
     return percent(row["tolerance"])
@@ -146,6 +146,8 @@ def cell(row: dict | None) -> str:
     if row is None:
         return "not in this run"
     _, unit = split_label(row["label"])
+    if row["measure"].get("bound") == "lower" and row["tolerance"] is None:
+        return number(row["computed"], unit)  # a reading where the bound does not apply
     text = f"{number(row['computed'], unit)} vs {number(row['reference'], unit)}"
     if row["tolerance"] is None:
         return text

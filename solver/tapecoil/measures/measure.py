@@ -27,7 +27,8 @@ class Measure:
         absolute: the error is |computed - reference| instead of the relative error.
         bound: "lower": the reference is a bound the computed value must reach (a separation at
             least so large), not a value to match; the error is then the shortfall below it
-            (zero when reached), in the quantity's unit, and the tolerance 0.
+            (zero when reached), in the quantity's unit, and the tolerance 0 (or None: a reading
+            where the bound does not apply, reported without it).
         extra: further figures of the measurement (worst cell, sample counts, ...).
     """
 
@@ -44,8 +45,8 @@ class Measure:
     def __post_init__(self):
         if self.bound not in (None, "lower"):
             raise ValueError(f"a measure's bound is None or 'lower', got {self.bound!r}")
-        if self.bound is not None and self.tolerance != 0.0:
-            raise ValueError("a bound's tolerance is 0: the computed value must reach the bound")
+        if self.bound is not None and self.tolerance not in (0.0, None):
+            raise ValueError("a bound's tolerance is 0 (the computed value must reach it) or None")
 
     @property
     def error(self) -> float | None:

@@ -373,7 +373,7 @@ def _separation_entry(directory: str | Path, phase: str) -> dict | None:
     return Measure(
         "smallest separation of distinct turns / h, from the snapshots [-]",
         history.global_minimum if found else None,
-        bound if real else 1.0,
+        bound,
         0.0 if real else None,
         "turns one thickness apart (physics brief Sec. 2): mid-surfaces h apart",
         (
@@ -382,9 +382,10 @@ def _separation_entry(directory: str | Path, phase: str) -> dict | None:
             f"r_hub theta_e^4 / 512 = {sag:.2g} h inside the circle through the nodes (theta_e an "
             "element's angle on the hub), on either turn"
             if real
-            else "a reading of the spiral obstacle, which does not keep the turns off each other"
+            else "a reading, without the bound: the spiral obstacle does not keep the turns off "
+            f"each other (the turns' real contact, contact.turns = 'surface', keeps at least {bound:g} h)"
         ),
-        bound="lower" if real else None,
+        bound="lower",
         extra={
             "at": history.t_min if found else None,
             "at_unit": "rad" if phase == "coiling" else "s",

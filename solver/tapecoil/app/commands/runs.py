@@ -25,6 +25,8 @@ def _measure_line(name: str, m: dict) -> str:
         return f"  {name:<26} not reached; reference {reference:.5g}"
     verdict = "" if m.get("passed") is None else ("  pass" if m["passed"] else "  FAIL")
     if m.get("bound") == "lower":
+        if m.get("tolerance") is None:  # a reading where the bound does not apply
+            return f"  {name:<26} computed {computed:<12.5g} reported"
         return f"  {name:<26} computed {computed:<12.5g} at least  {reference:<12.5g}{verdict}"
     error = m["error"]
     return f"  {name:<26} computed {computed:<12.5g} reference {reference:<12.5g} error {error:.2%}{verdict}"
