@@ -466,6 +466,7 @@ def test_a_flattened_beam_with_the_edges_relief_holds_the_shells_coil_energy():
     assert beam_energy == pytest.approx(shell_energy, rel=5e-3)
 
 
+@pytest.mark.slow
 def test_hybrid_window_case_passes_on_the_benchmark_tape():
     """``tapecoil verify hybrid-window`` on the benchmark tape and its hub (r_c/R = 0.84), where
     the edges' relief is 3.0 % of the coil's energy."""

@@ -163,6 +163,7 @@ def test_a_hybrid_run_refuses_a_coil_its_window_never_leaves(tmp_path):
     assert hybrid_deployment_need(coarse(2.0)) is None  # the shell model deploys any coil
 
 
+@pytest.mark.slow
 def test_a_run_with_the_hybrid_model_coils_and_deploys_with_the_hybrid(tmp_path):
     """A run with ``model.kind = "hybrid"`` (coarse, 4.5 rad: the window leaves the root once;
     2 ms of deployment): the coiling's summary names its measures as the shell's does, the

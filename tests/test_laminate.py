@@ -342,6 +342,7 @@ def cfrp_short(hub_angle: float, L: float = 0.15):
     )
 
 
+@pytest.mark.slow
 def test_cfrp_tape_coils_to_its_orthotropic_plate_state(tmp_path):
     """A turn and a half of the [0/90]s tape: the stored energy of the coiled length within 5 %
     of the orthotropic plate estimate (physics brief Sec. 10), the wound curvature and the face
