@@ -83,7 +83,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="results directory (default: <output.directory>/fold)")
     p.add_argument("--angle", type=float, help="end rotation to fold to [rad], in (0, pi] (default: 2)")
     p.add_argument(
-        "--length", type=float, help="length of the tape bent [m] (default: the tape's, at most 20 R)"
+        "--length", type=float, help="length of the tape bent [m] (default: the tape's, at most 16 R)"
     )
     p.add_argument("--sense", choices=("opposite", "equal", "both"), default="both", help="bending sense")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
