@@ -71,6 +71,25 @@ def test_coil_refuses_a_hub_angle_longer_than_the_tape(tmp_path, capsys):
     assert not (tmp_path / "out").exists()  # nothing was started
 
 
+@pytest.mark.parametrize(
+    ("mesh", "angle", "reason"),
+    [
+        ("coarse", 37.0, "on this mesh (2 elements at the free end"),
+        ("default", 37.7, "to bend from the coil's outer turn down onto the guide line"),
+    ],
+)
+def test_coil_refuses_a_hub_angle_that_leaves_the_free_end_no_room(tmp_path, capsys, mesh, angle, reason):
+    """A hub angle the tape is long enough for, but whose free part is too short for its end on
+    the guide line: refused before computing, with the room left and the room needed (the coarse
+    mesh stopped at 37.11 rad, the tape pressed through its outer turn, the default at 37.73)."""
+    path = tmp_path / "short_free.toml"
+    path.write_text(f"[coiling]\nhub_angle = {angle}\n")
+    assert main(["coil", str(path), "--mesh", mesh, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"coiling.hub_angle = {angle:g} rad leaves" in err and reason in err
+    assert not (tmp_path / "out").exists()  # nothing was started
+
+
 def test_run_refuses_a_hybrid_it_cannot_coil_before_computing(tmp_path, capsys):
     path = tmp_path / "equal.toml"
     path.write_text('[coiling]\nsense = "equal"\n')

@@ -178,6 +178,45 @@ def test_checkpoint_round_trip(coiled_short, tmp_path):
     assert np.allclose(np.sort(restored.contact.psi.x.array), np.sort(model.contact.psi.x.array))
 
 
+def test_the_free_end_needs_room_for_its_elements_and_to_come_off_the_coil():
+    """The room the free end needs (phases.coiling.free_end_room) against the free length
+    L - x(theta) of Eq. 4.3's spiral: 36 rad (the default, 30.7 mm free) passes on every preset;
+    the bound is two free-end elements on the coarse mesh and, on the default one, 2.5 times
+    the length x_c of the guide line inside the coil (x_c = 3.9 mm at 37.5 rad)."""
+    from tapecoil.config import ConfigError, MeshConfig
+    from tapecoil.phases.coiling import check_free_end_room, free_end_room
+    from tapecoil.theory import coiled_length_from_rotation
+
+    def config(angle, preset):
+        return dataclasses.replace(
+            Config(), coiling=CoilingConfig(hub_angle=angle), mesh=MeshConfig(preset=preset)
+        )
+
+    for preset in ("coarse", "default", "fine"):
+        check_free_end_room(config(36.0, preset))
+    free, for_coil, for_mesh = free_end_room(config(37.5, "default"))
+    assert free == pytest.approx(0.5 - coiled_length_from_rotation(37.5, 0.0127, 1e-4), rel=1e-12)
+    t_c = 1e-4 * 37.5 / (2 * math.pi)
+    assert for_coil == pytest.approx(2.5 * math.sqrt(2 * 0.0127 * t_c + t_c**2), rel=1e-12)
+    assert for_mesh == pytest.approx(2 * 0.004, rel=1e-12)
+    # the largest angle each mesh accepts: where the free length meets the bound
+    assert free_end_room(config(36.42, "coarse"))[0] > 0.025 > free_end_room(config(36.44, "coarse"))[0]
+    check_free_end_room(config(37.56, "default"))
+    with pytest.raises(ConfigError, match=r"coiling\.hub_angle = 37\.58 rad leaves 9\.6 mm"):
+        check_free_end_room(config(37.58, "default"))
+
+
+@pytest.mark.slow
+def test_the_largest_hub_angle_the_coarse_mesh_accepts_coils_to_completion(coil_last_row):
+    """Slow (`make validate`): the coarse benchmark at the largest hub angle its free end's room
+    accepts (36.42 rad, 25.4 mm free) coils to it, the tape kept within contact.stop_penetration
+    of its turns."""
+    coarse = dataclasses.replace(Config().mesh, preset="coarse")
+    config = dataclasses.replace(Config(), coiling=CoilingConfig(hub_angle=36.42), mesh=coarse)
+    row = coil_last_row(config, MPI.COMM_WORLD, 36.42)
+    assert row["hub_angle"] == pytest.approx(36.42, abs=1e-9)
+
+
 def test_a_tape_that_sinks_too_deep_stops_the_run_with_the_last_accepted_state():
     """A penalty far too soft (1e7 N/m^3 against the derived 8e9) lets the short tape sink into
     the hub as it wraps: steps that go deeper than contact.stop_penetration = 1 h are cut back,

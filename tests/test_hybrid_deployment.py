@@ -241,6 +241,8 @@ def test_the_release_starts_from_rest():
     assert max(r.kinetic_energy for r in deployment.records) < 1e-8
 
 
+# a minute of the suite's time; the full shell's balance stays in it (tests/test_deployment.py)
+@pytest.mark.slow
 def test_the_hybrids_root_loads_balance_the_tapes_momenta():
     """The coarse 4.5 rad coil deployed for 10 ms under gravity along the hub's axis (y), its
     root first the flattened beam's clamped node and, once the window reaches the root (at

@@ -191,11 +191,18 @@ def run_sweep(sweep: Sweep, directory: str | Path, comm=MPI.COMM_WORLD, progress
         directory.mkdir(parents=True, exist_ok=True)
     comm.barrier()
     cases = sweep.cases()
-    if sweep.study not in STUDY_OPTIONS and comm.rank == 0:
+    if sweep.study not in STUDY_OPTIONS:
         from tapecoil.app.checks import warn_before_coiling
+        from tapecoil.phases.coiling import check_free_end_room
 
-        for case in cases:  # every case's, before any case is computed
-            warn_before_coiling(sweep.config(case), prefix=f"sweep case {case}: ")
+        for case in cases:  # every case's, before any case is computed (on every rank: it raises)
+            try:
+                check_free_end_room(sweep.config(case))
+            except ConfigError as err:
+                raise ConfigError(f"sweep case {case}: {err}") from None
+        if comm.rank == 0:
+            for case in cases:
+                warn_before_coiling(sweep.config(case), prefix=f"sweep case {case}: ")
     mine = [(i, case) for i, case in enumerate(cases) if i % groups == group]
     bar = None
     if progress and comm.rank == 0:

@@ -27,6 +27,7 @@ coiling positive. The measures report it as a magnitude.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import dolfinx
@@ -34,7 +35,8 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
-from tapecoil.config import Config
+from tapecoil import theory
+from tapecoil.config import Config, ConfigError
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import assemble_into, global_scalar, owned_constrained_dofs
@@ -46,6 +48,53 @@ from tapecoil.phases.tape_on_hub import TapeOnHub
 
 # the pull at the free end rises with the flattening; the guide line is the hub's top tangent
 _GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
+
+# The free part a coiling needs at its end (:func:`free_end_room`), in elements at the free end
+# and in lengths of the guide line inside the coil: the smallest that the coarse and the default
+# meshes coil through, measured (docs/notes/coiling.md, *Room for the free end*)
+_ROOM_ELEMENTS = 2.0
+_ROOM_INSIDE = 2.5
+
+
+def free_end_room(config: Config) -> tuple[float, float, float]:
+    """The free length [m] a coiling to ``coiling.hub_angle`` leaves, and the least it needs: on
+    account of the coil's thickness, and of the mesh.
+
+    The free end slides along the guide line tangent to the hub, its section held in the shape
+    it has. The coil's outer turn stands t_c = h theta / (2 pi) above the hub, so the line runs
+    inside the coil for x_c = sqrt((r_hub + t_c)^2 - r_hub^2) from where it touches the hub: the
+    tape between the coil and its end must bend down onto the line and stay off the coil, and
+    the elements at the end must resolve that bend. A free part shorter than
+    ``_ROOM_INSIDE`` x_c or ``_ROOM_ELEMENTS`` free-end elements presses the tape through its
+    outer turn before the hub angle is reached.
+    """
+    tp, r_hub, theta = config.tape, config.hub.radius, config.coiling.hub_angle
+    free = tp.L - theory.coiled_length_from_rotation(theta, r_hub, tp.h)
+    thickness = tp.h * theta / (2 * math.pi)
+    inside = math.sqrt((r_hub + thickness) ** 2 - r_hub**2)
+    element = MeshResolution.from_config(config.mesh, tp.L).element_lengths(tp.L)[1]
+    return free, _ROOM_INSIDE * inside, _ROOM_ELEMENTS * element
+
+
+def check_free_end_room(config: Config) -> None:
+    """Refuse, before computing, a hub angle that leaves the free end too little room
+    (:func:`free_end_room`): a :class:`ConfigError` naming ``coiling.hub_angle``, the room left
+    and the room needed."""
+    free, for_coil, for_mesh = free_end_room(config)
+    if free >= max(for_coil, for_mesh):
+        return
+    if for_mesh > for_coil:
+        need = (
+            f"{for_mesh * 1e3:.1f} mm on this mesh ({_ROOM_ELEMENTS:g} elements at the free end; a finer "
+            f"mesh.element_size needs less, down to {for_coil * 1e3:.1f} mm)"
+        )
+    else:
+        need = f"{for_coil * 1e3:.1f} mm to bend from the coil's outer turn down onto the guide line"
+    raise ConfigError(
+        f"coiling.hub_angle = {config.coiling.hub_angle:g} rad leaves {free * 1e3:.1f} mm of the tape "
+        f"free, and its end on the guide line needs {need}: the free part would be pressed through "
+        "the coil's outer turn before the hub angle is reached (a smaller hub angle or a longer tape)"
+    )
 
 
 class CoilingModel:

@@ -22,7 +22,7 @@ from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation
 from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_measure, ploy_measure
-from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
+from tapecoil.phases.coiling import CoilingModel, check_free_end_room, read_checkpoint, write_checkpoint
 from tapecoil.phases.coiling_rows import CoilingRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.stepped import SteppedRun
@@ -305,6 +305,7 @@ def run_coiling(
     on a signal the run ends after the current step, writes everything and reports
     ``interrupted`` in the summary.
     """
+    check_free_end_room(config)
     t_start = time.perf_counter()
     restart = None
     if resume is not None:

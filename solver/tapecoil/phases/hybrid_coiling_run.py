@@ -277,8 +277,9 @@ def run_hybrid_coiling(
     completed one's summary again, nothing computed); one without the hybrid's state (another
     model's, or an older one's) is not continued, and the coiling starts again."""
     from tapecoil.core.checkpoint import read_meta, read_tables
-    from tapecoil.phases.coiling import read_checkpoint
+    from tapecoil.phases.coiling import check_free_end_room, read_checkpoint
 
+    check_free_end_room(config)
     t_start = time.perf_counter()
     if resume is not None:
         meta = read_meta(resume)

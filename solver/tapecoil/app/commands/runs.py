@@ -112,6 +112,9 @@ def cmd_coil(args: argparse.Namespace) -> int:
     checkpoint = _resume_path(args.resume, directory, "stowed")
     from mpi4py import MPI
 
+    from tapecoil.phases.coiling import check_free_end_room
+
+    check_free_end_room(config)
     warn_before_coiling(config, directory, MPI.COMM_WORLD)
     summary = run(
         config,
@@ -180,6 +183,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         _resume_path("", directory, "stowed")
     from mpi4py import MPI
 
+    from tapecoil.phases.coiling import check_free_end_room
+
+    check_free_end_room(config)
     warn_before_coiling(config, directory, MPI.COMM_WORLD)
     summary = run(
         config,
