@@ -171,6 +171,10 @@ def test_coil_short_run_writes_results(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert summary["completed"] and summary["coiling"]["hub_angle"] == 0.3
     assert "deployment" not in summary
+    run = summary["coiling"]["run"]
+    # the spiral's contact is a form: no time of a term's own; writing the output is a part of the run
+    assert run["contact_per_iteration"] == 0.0
+    assert 0 < run["output_time"] < run["process_wall_time"]
     for name in (
         "config.toml",
         "coiling_history.csv",

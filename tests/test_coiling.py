@@ -435,6 +435,9 @@ def test_surface_contact_keeps_the_second_turn_off_the_first():
     f = force.x.array[model.contact.nodes.u_dofs]
     assert np.abs(f).sum() > 0
     assert np.abs(f.sum(axis=0)).max() <= 1e-10 * np.abs(f).sum()
+    # the contact's own time is counted, a part of the assembly's and the linear solve's
+    timing = model.solver.timing_per_iteration()
+    assert 0 < timing["terms"] < timing["assembly"] + timing["linear_solve"]
 
 
 def test_hub_torque_from_the_reactions_matches_the_energy_balance(coiled_short):

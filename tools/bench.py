@@ -4,7 +4,9 @@
 preset; prints DOFs, load steps, Newton iterations per step, the largest converged step and the
 mean time per Newton iteration (assembly and linear solve), with the machine and the MPI size.
 --case coil: the benchmark coiling run (flattening, then 36 rad) into results/bench-coil-*;
-prints DOFs, steps, Newton iterations, wall time and the validated measures.
+prints DOFs, steps, Newton iterations, wall time, the time per Newton iteration in assembly and
+in the linear solve and the turns' real contact's share of them (contact.turns = "surface"),
+the time spent writing output and its share of the run, and the validated measures.
 --case deploy: the deployment from the stowed state of --case coil on the same mesh and rank
 count (results/bench-coil-<mesh>-np<N>/stowed; run that first) to lambda = 1, into
 results/bench-deploy-*; the same figures.
@@ -195,6 +197,8 @@ if args.case in ("coil", "deploy", "payout"):
         "machine": machine,
     }
     report.update({k: v for k, v in run.items() if k != "mesh"})
+    if run.get("output_time") is not None and run.get("process_wall_time"):
+        report["output_share"] = run["output_time"] / run["process_wall_time"]
     report["completed"] = summary["completed"]
     for name, value in summary["measures"].items():
         if isinstance(value, dict) and value.get("error") is not None:

@@ -161,6 +161,12 @@ class SelfContactTerm:
     def current(self) -> ContactPairs:
         return self._pairs("current")
 
+    def seconds(self) -> float:
+        """The wall time this term's contact has spent [s]: its search, its pairs' forces and
+        matrices, the nodal normals' part applied in the Krylov solve (and the pairs that the
+        run's measures asked of the same contact)."""
+        return float(sum(self.contact.timings.values()))
+
     def _pair_nodes(self, pairs: ContactPairs) -> np.ndarray:
         """The node and the partner cell's nodes of each pair (P, 10)."""
         return np.concatenate([pairs.node[:, None], self.contact.cells[pairs.cell]], axis=1)

@@ -249,13 +249,21 @@ class SNESSolver:
         return result
 
     def timing_per_iteration(self) -> dict[str, float]:
-        """Mean wall time per Newton iteration [s]: assembly (residual + Jacobian) and the rest.
+        """Mean wall time per Newton iteration [s]: assembly (residual + Jacobian), the rest, and
+        the terms' own share of both.
 
-        The rest is the linear solve (factorisation and substitution) plus SNES overhead.
+        The rest is the linear solve (factorisation and substitution) plus SNES overhead. The
+        terms' share (``terms``) is what the terms that count their time (a ``seconds()``
+        method) spent, in the assembly and in the operator's applied part: a part of the two.
         """
         its = max(self.timings["iterations"], 1)
         assembly = self.timings["residual"] + self.timings["jacobian"]
-        return {"assembly": assembly / its, "linear_solve": (self.timings["solve"] - assembly) / its}
+        terms = sum(term.seconds() for term in self.terms if hasattr(term, "seconds"))
+        return {
+            "assembly": assembly / its,
+            "linear_solve": (self.timings["solve"] - assembly) / its,
+            "terms": terms / its,
+        }
 
     @classmethod
     def from_config(

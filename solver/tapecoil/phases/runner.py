@@ -14,6 +14,8 @@ import time
 from abc import ABC, abstractmethod
 from pathlib import Path
 
+from mpi4py import MPI
+
 from tapecoil.config import Config
 from tapecoil.core.interrupt import Interrupted
 from tapecoil.core.output import write_csv
@@ -81,14 +83,18 @@ class PhaseOutput:
         )
         self.bar = progress_bar(comm, total, phase, unit) if progress else None
         self.checkpoint = None
+        # wall time spent writing VTX, snapshots and checkpoints [s] (the summary's output_time)
+        self.seconds = 0.0
 
     def step(self, value: float, step: float, iterations: int, extra: str = "", checkpoint=True) -> None:
         """After a converged step at ``value`` (hub angle or time); ``checkpoint``: one may be written."""
         self.count += 1
+        t0 = time.perf_counter()
         if self.count % self.output.vtx_every == 0:
             self.writer.write(value)
         if checkpoint and self.checkpoint is not None and self.count % self.output.checkpoint_every == 0:
             self.checkpoint()
+        self.seconds += time.perf_counter() - t0
         if self.bar is not None:
             self.bar.n = round(value, 4)
             self.bar.set_postfix_str(f"step {step:.3g} {self.unit} its {iterations}{extra}")
@@ -97,8 +103,10 @@ class PhaseOutput:
     def close(self, value: float) -> None:
         if self.bar is not None:
             self.bar.close()
+        t0 = time.perf_counter()
         self.writer.write(value)
         self.writer.close()
+        self.seconds += time.perf_counter() - t0
 
 
 class Phase(ABC):
@@ -208,10 +216,15 @@ def run_phase(
         phase.message = str(err)
         LOG.warning("%s %s at %.6g %s; checkpoint written", phase.name, err, phase.position(), phase.unit)
     out.close(phase.position())
+    t0 = time.perf_counter()
     write_csv(directory / f"{phase.name}_history.csv", phase.history, comm)
     if config.output.checkpoint:
         phase.write_checkpoint(checkpoint_path, meta(phase.completed))
+    out.seconds += time.perf_counter() - t0
     phase.finish(directory)
     summary = phase.summary(interrupted, t_start)
+    if "run" in summary:
+        # this process's; the run's wall time includes it
+        summary["run"]["output_time"] = comm.allreduce(out.seconds, op=MPI.MAX)
     LOG.info("%s", phase.end_log(summary))
     return summary
