@@ -311,7 +311,7 @@ class HybridCoiling:
     def coil_geometry(self) -> dict[str, float]:
         """The coiled length [m], the material behind the lift-off (the point wound by the hub
         angle), and the outer coil radius [m], that of the outer face half a turn behind it, as
-        the full shell's (:func:`~tapecoil.phases.centre_line.coil_geometry`; collective)."""
+        the full shell's (:func:`~tapecoil.measures.centre_line.coil_geometry`; collective)."""
         x, points = centre_line(self.hybrid)
         psi = np.maximum.accumulate(winding_along(self.frame, self.angle, points))
         radius = self.frame.polar(points.T)[0]

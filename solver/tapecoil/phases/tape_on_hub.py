@@ -5,7 +5,7 @@ coiling adds the guide, the pull, its solver and predictor; the deployment the i
 release and its time stepping. A checkpoint of any phase holds this state (the shell's state and
 the winding angles), so a phase starts from another's checkpoint by reading this alone, without
 building the other phase's forms or solver. The turns' contact with each other is
-:mod:`~tapecoil.phases.turn_contact`'s, the centre-line measures :mod:`~tapecoil.phases.centre_line`'s.
+:mod:`~tapecoil.phases.turn_contact`'s, the centre-line measures :mod:`~tapecoil.measures.centre_line`'s.
 """
 
 from __future__ import annotations
@@ -29,9 +29,9 @@ from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact, default_penalty
 from tapecoil.hub.frame import HubFrame
+from tapecoil.measures import centre_line as centre
 from tapecoil.models.edges import owned_edge_dofs
 from tapecoil.models.shell import NaghdiShell, shell_material
-from tapecoil.phases import centre_line as centre
 from tapecoil.phases.turn_contact import TurnContact
 
 
