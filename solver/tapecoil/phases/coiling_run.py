@@ -25,7 +25,7 @@ from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_me
 from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
 from tapecoil.phases.coiling_rows import CoilingRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
-from tapecoil.phases.stepped import SteppedRun
+from tapecoil.phases.stepped import EASY_ITERATIONS, SteppedRun
 
 
 @dataclass
@@ -45,8 +45,7 @@ class CoilingRun(SteppedRun):
     its row (:class:`~tapecoil.phases.coiling_rows.CoilingRows`).
     """
 
-    # the step grows after steps that converge in at most this many Newton iterations
-    easy_iterations = 8
+    easy_iterations = EASY_ITERATIONS
     # the largest step [rad] of each predictor, unless coiling.max_step sets one: the shift
     # predicts a turning hub's state well enough for long steps, fewer in all than shorter ones
     # take; the secant needs short ones (the benchmark's counts: docs/notes/coiling.md)

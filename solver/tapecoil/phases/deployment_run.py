@@ -26,7 +26,7 @@ from tapecoil.phases.deployment import (
 )
 from tapecoil.phases.deployment_rows import DeploymentRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
-from tapecoil.phases.stepped import SteppedRun
+from tapecoil.phases.stepped import EASY_ITERATIONS, SteppedRun
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
@@ -52,9 +52,7 @@ class DeploymentRun(SteppedRun):
     (:class:`~tapecoil.phases.deployment_rows.DeploymentRows`).
     """
 
-    # the step grows after steps of at most this many Newton iterations: a stricter bound keeps
-    # the steps short where the deployment would take longer ones, for more steps in all
-    easy_iterations = 8
+    easy_iterations = EASY_ITERATIONS
 
     def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None, stop=None):
         super().__init__(DeploymentResult(), on_step, stop)

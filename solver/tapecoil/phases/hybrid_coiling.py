@@ -54,13 +54,11 @@ from tapecoil.phases.coiling_run import CoilingRun
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.predictors import choose_predictor, wound_length
 from tapecoil.phases.root_loads import HybridRootLoads
+from tapecoil.phases.stepped import EASY_ITERATIONS, clock_origin, last_wall_time
 from tapecoil.phases.turn_contact import TurnContact
 from tapecoil.phases.window_on_hub import ContactSettings, WindowOnHub
 
 __all__ = ["HybridCoiling", "WindowSettings"]
-
-# the step grows after steps of at most this many Newton iterations (the full shell's coiling's)
-EASY_ITERATIONS = 8
 
 
 @dataclass(frozen=True)
@@ -507,7 +505,7 @@ class HybridCoiling:
         self._leg = None if state["leg"] is None else tuple(state["leg"])
         self.hybrid = self.build(self.moves[-1][1], f"hybrid_coil{len(self.moves) - 1}")
         self.hybrid.set_state(tables)
-        self._t0 = time.perf_counter() - (self.records[-1].wall_time if self.records else 0.0)
+        self._t0 = clock_origin(last_wall_time(self.records))
 
     def carry_into(self, model, hybrid: HybridProblem | None = None, angle: float | None = None) -> None:
         """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingModel` of

@@ -83,6 +83,7 @@ from tapecoil.phases.hybrid_free_hub import HybridFreeHub
 from tapecoil.phases.hybrid_motion import HybridMotion
 from tapecoil.phases.release import EndHold
 from tapecoil.phases.root_loads import HybridRootLoads
+from tapecoil.phases.stepped import EASY_ITERATIONS, clock_origin, last_wall_time
 
 __all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment"]
 
@@ -468,7 +469,7 @@ class HybridDeployment:
         back, the last converged state kept."""
         cfg = self.config
         d = cfg.deployment
-        t0 = time.perf_counter() - (self.records[-1].wall_time if self._resumed and self.records else 0.0)
+        t0 = clock_origin(last_wall_time(self.records) if self._resumed else 0.0)
         smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
         release = min(d.release_time, d.t_end)
         phases = [(release, min(release / 20, d.dt))] if release > 0 else []
@@ -559,7 +560,7 @@ class HybridDeployment:
             predict=predict,
             error=self.step_error if d.error_tolerance > 0 else None,
             commit=lambda: self._commit(motion),
-            easy_iterations=8,
+            easy_iterations=EASY_ITERATIONS,
         )
         continuation.on_step = lambda step: converged(step, end)
         first, self.next_step = self.next_step, None
