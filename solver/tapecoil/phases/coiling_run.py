@@ -22,6 +22,7 @@ from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation
 from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_measure, ploy_measure
+from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.phases.coiling import CoilingModel, read_checkpoint, write_checkpoint
 from tapecoil.phases.coiling_rows import CoilingRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
@@ -82,7 +83,7 @@ class CoilingRun(SteppedRun):
         relax = Relaxation(
             m.viscosity,
             m.previous,
-            scale=10 * m.config.wall.bending.D11 / m.element_length**4,
+            scale=relaxation_scale(m.config.wall.bending, m.element_length),
             max_iterations=100,
         )
         return Continuation(

@@ -47,6 +47,7 @@ from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_station
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.hybrid_problem import HybridProblem
+from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.models.tape_beam import tape_beam
 from tapecoil.models.window import carry_over, full_shell
 from tapecoil.models.window_settling import settle_placed
@@ -472,7 +473,7 @@ class HybridCoiling:
                 first_step=first,
                 max_step=leg_step,
                 min_step=1e-6,
-                relaxation=10 * bending.D11 / self.element**4,
+                relaxation=relaxation_scale(bending, self.element),
                 on_step=record,
                 solver_config=self.config.solver,
                 options=self.petsc_options,
