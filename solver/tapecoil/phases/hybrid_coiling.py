@@ -42,7 +42,7 @@ from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import MeshResolution
-from tapecoil.hub.contact import default_penalty, root_fairing, spiral_obstacle
+from tapecoil.hub.contact import ContactSettings, root_fairing, spiral_obstacle
 from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_station
 from tapecoil.models.beam_section import BeamSection
@@ -57,7 +57,7 @@ from tapecoil.phases.predictors import choose_predictor, wound_length
 from tapecoil.phases.root_loads import HybridRootLoads
 from tapecoil.phases.stepped import EASY_ITERATIONS, clock_origin, last_wall_time
 from tapecoil.phases.turn_contact import TurnContact
-from tapecoil.phases.window_on_hub import ContactSettings, WindowOnHub
+from tapecoil.phases.window_on_hub import WindowOnHub
 
 __all__ = ["HybridCoiling", "WindowSettings"]
 
@@ -164,17 +164,7 @@ class HybridCoiling:
             **config.coiling.petsc_options,
         }
         self.centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
-        penalty = cc.penalty or cc.penalty_scale * default_penalty(
-            config.wall.axial_modulus, tp.h, self.element
-        )
-        self.contact = ContactSettings(
-            penalty,
-            math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1,
-            max(2 * self.element / config.hub.radius, 0.3),
-            cc.smoothing * tp.h,
-            cc.turns,
-            cc.search_margin * tp.h,
-        )
+        self.contact = ContactSettings.from_config(config, self.element)
         self.angle = 0.0
         self.pull = config.coiling.tension  # [N] at the free end (a payout may set its own)
         self.records: list[CoilingRecord] = []
