@@ -23,13 +23,10 @@ from tapecoil.models.edges import facet_condition, owned_edge_dofs
 from tapecoil.models.materials import shell_material
 from tapecoil.models.nodes import Nodes
 from tapecoil.models.problem import ShellProblem
+from tapecoil.phases.coiling import GUIDE_COMPONENTS
 from tapecoil.phases.predictors import AlongTape, turn_wound, wound_length
 
 __all__ = ["WindowOnHub"]
-
-# the free end's guide (as the full shell's coiling): displacement across and normal to the line
-# and the end's rotations held
-_GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
 
 
 class WindowOnHub(ShellProblem):
@@ -93,7 +90,7 @@ class WindowOnHub(ShellProblem):
         self.energy = energy
         if start + length >= tp.L * (1 - 1e-9) and not released:
             free_end = self.strip.facet_tags.find(FREE_END)
-            self.bcs += [facet_condition(model, sub, free_end)[1] for sub in _GUIDE_COMPONENTS]
+            self.bcs += [facet_condition(model, sub, free_end)[1] for sub in GUIDE_COMPONENTS]
             # T spread evenly over the free end's arc, as the full shell's pull
             pull = config.coiling.tension if pull is None else pull
             energy = energy - pull * model.u[0] / tp.b * model.ds(FREE_END)
