@@ -37,6 +37,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.config.model import hybrid_coiling_need
 from tapecoil.contact.surface import BeamStripSurface, JoinedSurface, ShellSurface
 from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core.dofs import global_size
@@ -135,11 +136,10 @@ class HybridCoiling:
         self.first_step, self.max_step = first_step, max_step
         config = self.config
         tp, cc = config.tape, config.contact
-        if config.coiling.sense != "opposite":
-            raise ValueError("the hybrid coils in the opposite sense only: coiling.sense must be 'opposite'")
+        need = hybrid_coiling_need(config)
+        if need is not None:
+            raise ValueError(f"the hybrid coils only with {need}")
         resolution = MeshResolution.from_config(config.mesh, tp.L)
-        if resolution.grading != 1.0:
-            raise ValueError("the hybrid's shell and beam share their nodes: mesh.grading must be 1")
         self.element = tp.L / resolution.along
         self.window_length = self.element * math.ceil((self.window.ahead + self.window.behind) / self.element)
         if self.window_length >= tp.L:
