@@ -416,7 +416,7 @@ class HybridCoiling:
         )
         h.shell.flattening = False
         h.beam.committed_load = 0.0
-        h._set_load(0.0)
+        h.set_load(0.0)
         return records
 
     def coil(self, final_angle: float, on_step=None, stops: tuple[float, ...] = ()) -> None:
