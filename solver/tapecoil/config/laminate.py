@@ -132,7 +132,7 @@ class LaminateConfig:
     def wall(self, tape):
         """The tape's wall (:class:`tapecoil.theory.laminate.Wall`): A, B, D, H from ``tape``'s
         E, nu and h (a :class:`~tapecoil.config.sections.TapeConfig`), from the plies, or as given."""
-        from tapecoil.theory.laminate import Wall  # theory imports tapecoil.config
+        from tapecoil.theory.laminate import Wall  # lazy: a configuration loads without scipy
 
         if self.kind == "isotropic":
             return Wall.isotropic(tape.E, tape.nu, tape.h)

@@ -85,10 +85,9 @@ def check_model(config) -> None:
         )
 
 
-def hybrid_need(config) -> str | None:
-    """The first setting the hybrid needs to coil and deploy the tape of ``config`` and does not
-    have, with the reason ("key = value: why"), or None."""
-    needs = (
+def _coiling_needs(config) -> tuple:
+    """What the hybrid needs to coil the tape of ``config``: (met, "key = value", why) each."""
+    return (
         (
             config.coiling.sense == "opposite",
             "coiling.sense = 'opposite'",
@@ -99,13 +98,28 @@ def hybrid_need(config) -> str | None:
             "mesh.grading = 1",
             "its shell and beams share their nodes along the tape",
         ),
-        (
-            config.deployment.rho_inf < 1.0,
-            "deployment.rho_inf < 1",
-            "it deploys by generalized-alpha (the energy-conserving scheme is the full shell's)",
-        ),
     )
+
+
+def _first_unmet(needs) -> str | None:
     return next((f"{setting}: {why}" for ok, setting, why in needs if not ok), None)
+
+
+def hybrid_coiling_need(config) -> str | None:
+    """The first setting the hybrid needs to coil the tape of ``config`` and does not have, with
+    the reason ("key = value: why"), or None."""
+    return _first_unmet(_coiling_needs(config))
+
+
+def hybrid_need(config) -> str | None:
+    """The first setting the hybrid needs to coil and deploy the tape of ``config`` and does not
+    have, with the reason ("key = value: why"), or None."""
+    deploying = (
+        config.deployment.rho_inf < 1.0,
+        "deployment.rho_inf < 1",
+        "it deploys by generalized-alpha (the energy-conserving scheme is the full shell's)",
+    )
+    return _first_unmet((*_coiling_needs(config), deploying))
 
 
 def hybrid_deployment_need(config) -> str | None:

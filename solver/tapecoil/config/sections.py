@@ -420,7 +420,7 @@ class Config:
         Raises :class:`ConfigError` naming ``coiling.hub_angle`` when the hub angle exceeds
         :func:`tapecoil.theory.max_hub_angle`.
         """
-        from tapecoil import theory  # theory imports tapecoil.config
+        from tapecoil import theory  # lazy: a configuration loads without scipy
 
         tp, r_hub, coiling = self.tape, self.hub.radius, self.coiling
         largest = theory.max_hub_angle(tp.L, r_hub, tp.h)
@@ -446,7 +446,7 @@ class Config:
         sweeps) warn of these just before they start; loading a configuration for anything else
         (a report, a plot, a tension study with its own pull) stays quiet.
         """
-        from tapecoil import theory  # theory imports tapecoil.config
+        from tapecoil import theory  # lazy: a configuration loads without scipy
 
         tp, r_hub, coiling = self.tape, self.hub.radius, self.coiling
         needed = theory.required_coiling_tension(self.wall.bending, tp.alpha, tp.R, r_hub, tp.h)

@@ -246,6 +246,19 @@ def _to_parameter_coordinates(geom: StripGeometry) -> None:
         gmsh.model.mesh.setNode(int(tag), [float(a), float(b), 0.0], [])
 
 
+def build_gmsh(geom: Surface, res: MeshResolution) -> None:
+    """Mesh ``geom`` in the current gmsh model, its nodes in parameter coordinates (call on one rank).
+
+    A strip is built in 3D by gmsh (the arc extruded) and its nodes moved to parameter
+    coordinates; any other surface is meshed on its parameter rectangle.
+    """
+    if isinstance(geom, StripGeometry):
+        build_strip_gmsh(geom, res)
+        _to_parameter_coordinates(geom)
+    else:
+        _build_parameter_rectangle(geom.xi_range, res)
+
+
 @dataclass
 class StripMesh:
     """The strip's DOLFINx mesh on the parameter domain, its tags, and its 3D geometry."""
@@ -276,7 +289,7 @@ def _gmsh_model(comm, geom: Surface, res: MeshResolution, rank: int, msh: str | 
             error = None
             if comm.rank == rank:
                 try:
-                    geom.build_gmsh(res)
+                    build_gmsh(geom, res)
                     if msh is not None:
                         gmsh.write(str(msh))
                 except Exception as exc:

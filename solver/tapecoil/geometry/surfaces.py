@@ -17,15 +17,10 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tapecoil.config import Config
-
-if TYPE_CHECKING:
-    from tapecoil.geometry.meshes import MeshResolution
-
 
 # The functions a map may use, from numpy (also for complex arguments: the Jacobian is the map's
 # complex-step derivative) or from UFL.
@@ -169,12 +164,6 @@ class Surface:
             return f"{text} (on the edge {names[0]})"
         return f"{text} (inside)"
 
-    def build_gmsh(self, res: MeshResolution) -> None:
-        """Mesh the parameter rectangle in the current gmsh model, nodes in parameter coordinates."""
-        from tapecoil.geometry.meshes import _build_parameter_rectangle
-
-        _build_parameter_rectangle(self.xi_range, res)
-
 
 @dataclass(frozen=True)
 class MappedSurface(Surface):
@@ -228,13 +217,6 @@ class StripGeometry(Surface):
         if self.flat:
             return np.vstack([X[0], X[1]])
         return np.vstack([X[0], self.R * np.arctan2(X[1], self.R - X[2])])
-
-    def build_gmsh(self, res: MeshResolution) -> None:
-        """gmsh builds the 3D strip; its nodes are then moved to parameter coordinates."""
-        from tapecoil.geometry.meshes import _to_parameter_coordinates, build_strip_gmsh
-
-        build_strip_gmsh(self, res)
-        _to_parameter_coordinates(self)
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,8 @@ over the root step); with E h / 10^4 the turns sank by several h.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import dolfinx
 import numpy as np
@@ -52,6 +54,9 @@ import ufl
 from tapecoil.core.smoothing import penetration_ufl, smoothstep, smoothstep_ufl
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, Nodes
+
+if TYPE_CHECKING:
+    from tapecoil.config import Config
 
 # what keeps the turns apart: the ideal spiral as an obstacle, or the turns' real surfaces
 TURN_MODELS = ("spiral", "surface")
@@ -78,6 +83,37 @@ def root_fairing(psi, r_hub: float, h: float, ramp_width: float):
 def default_penalty(E: float, h: float, element_length: float) -> float:
     """Penalty stiffness per unit area [N/m^3]: element contact stiffness E h / 100."""
     return 0.01 * E * h / element_length**2
+
+
+@dataclass
+class ContactSettings:
+    """The hub's and the turns' contact, the full shell's and the hybrid's alike."""
+
+    penalty: float  # [N/m^3] per unit area of the shell
+    max_turns: int
+    ramp_width: float  # [rad]
+    smoothing: float  # [m]
+    turns: str = "surface"  # what keeps the turns apart (contact.turns)
+    buffer: float = 0.0  # [m] the search's Verlet buffer between the turns' surfaces
+
+    @classmethod
+    def from_config(cls, config: Config, element_length: float) -> ContactSettings:
+        """The settings of ``config``'s [contact] for its tape on its hub, meshed with elements
+        ``element_length`` [m] long along the tape."""
+        tp, cc = config.tape, config.contact
+        penalty = cc.penalty or cc.penalty_scale * default_penalty(
+            config.wall.axial_modulus, tp.h, element_length
+        )
+        return cls(
+            penalty,
+            # the spiral's turns: enough for the winding the hub angle gives, with a margin
+            math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1,
+            # the climb over the root end spread over about two elements (at least 0.3 rad)
+            max(2 * element_length / config.hub.radius, 0.3),
+            cc.smoothing * tp.h,
+            cc.turns,
+            cc.search_margin * tp.h,
+        )
 
 
 class CoilContact:

@@ -17,8 +17,8 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.core.dofs import global_scalar
+from tapecoil.measures.centre_line import edge_lines
 from tapecoil.measures.section_forces import SectionForces
-from tapecoil.phases.centre_line import edge_lines
 
 
 class CoilSection:

@@ -1,7 +1,7 @@
 """How closely a tape wrapped round a cylinder follows it: the conforming wrap and the folds.
 
 Read from the centre line alone (its winding angle psi about the hub axis and its mid-surface
-distance r from the axis, :func:`tapecoil.phases.centre_line.centre_line`), independently of
+distance r from the axis, :func:`tapecoil.measures.centre_line.centre_line`), independently of
 the contact that holds the tape on the hub. Wilson et al. (2020) count a tape as wrapped when
 its centre line lies within three thicknesses of the cylinder over a wrap of 305 to 315 degrees
 (physics brief Sec. 10).

@@ -278,7 +278,7 @@ class BeamProblem:
         """Put back :meth:`state_values` (after the fields), the loads set to the accepted one."""
         self.committed_load = float(values["committed_load"])
         self.model.natural_share.value = float(values["natural_share"])
-        self._set_load(self.committed_load)
+        self.set_load(self.committed_load)
 
     def forms(self) -> tuple:
         """The residual and Jacobian (UFL) of the beam's energy and the energies beside it."""
@@ -290,13 +290,6 @@ class BeamProblem:
     def set_load(self, value: float) -> None:
         """The load parameter, and the supports it turns, in place (a driver of its own, the
         arc-length continuation, sets it so)."""
-        self._set_load(value)
-
-    def commit(self) -> None:
-        """Accept the state in place as a converged step: the rotations' reference moves on."""
-        self._commit()
-
-    def _set_load(self, value: float) -> None:
         self.load.value = value
         for u_values, theta_values, point, centre, axis, place in self._turning:
             if u_values is not None:
@@ -306,11 +299,13 @@ class BeamProblem:
             increment = (value - self.committed_load) * axis  # the rotation since the last accepted step
             theta_values.x.array[:] = np.tile(increment, len(theta_values.x.array) // 3)
 
-    def _predict(self, load_from: float, load_to: float) -> None:
+    def predict(self, load_from: float, load_to: float) -> None:
+        """The initial guess of a step from ``load_from`` to ``load_to``: each predictor's."""
         for predict in self._predictors:
             predict(load_from, load_to)
 
-    def _commit(self) -> None:
+    def commit(self) -> None:
+        """Accept the state in place as a converged step: the rotations' reference moves on."""
         self.model.commit()
         self.committed_load = float(self.load.value)
         for update in self._winding:
@@ -356,12 +351,12 @@ class BeamProblem:
         control = StepControl(first_step, max_step, min_step, grow, cutback, max_cutbacks)
         continuation = Continuation(
             solve=solver.solve,
-            set_load=self._set_load,
+            set_load=self.set_load,
             state=model.q,
             control=control,
-            commit=self._commit,
+            commit=self.commit,
             on_step=on_step,
-            predict=self._predict if self._predictors else None,
+            predict=self.predict if self._predictors else None,
         )
         try:
             self.history += continuation.run(self.committed_load, load_end)

@@ -122,7 +122,7 @@ class HybridProblem:
             scatter_fields(fields, tables)
             prefix = f"value:{p}:"
             part.set_state_values({k[len(prefix) :]: v for k, v in tables.items() if k.startswith(prefix)})
-        self._set_load(self.beam.committed_load)
+        self.set_load(self.beam.committed_load)
         self.state_changed()
 
     def state_changed(self) -> None:
@@ -147,22 +147,27 @@ class HybridProblem:
             tie.flatness.value = f
         self.beam.model.natural_share.value = f
 
-    def _set_load(self, value: float) -> None:
+    def set_load(self, value: float) -> None:
+        """The load parameter of the shell's and the beam's problems, and the ties' flatness while
+        they flatten, in place."""
         self.shell.set_load(value)
-        self.beam._set_load(value)
+        self.beam.set_load(value)
         if self._flattening:
             self._set_flatness(value)
 
-    def _commit(self) -> None:
+    def commit(self) -> None:
+        """Accept the joint state in place as a converged step: the ties', the beam's, the
+        shell's and the contact's references move on."""
         for tie in self.ties.values():
             tie.commit()  # reads its end's rotation increment before the beam sets it to zero
-        self.beam._commit()
+        self.beam.commit()
         self.shell.commit(self.beam.committed_load)
         if self.contact is not None:
             self.contact.accept()
 
-    def _predict(self, load_from: float, load_to: float) -> None:
-        self.beam._predict(load_from, load_to)
+    def predict(self, load_from: float, load_to: float) -> None:
+        """The initial guess of a step from ``load_from`` to ``load_to``: the beam's and the shell's."""
+        self.beam.predict(load_from, load_to)
         self.shell.predict(load_from, load_to)
 
     def _solver(
@@ -243,13 +248,13 @@ class HybridProblem:
         )
         continuation = Continuation(
             solve=solver.solve,
-            set_load=self._set_load,
+            set_load=self.set_load,
             state=JointState(self.shell.model.q, self.beam.model.q),
             control=control,
             relaxation=relax,
-            commit=self._commit,
+            commit=self.commit,
             on_step=on_step,
-            predict=self._predict,
+            predict=self.predict,
             easy_iterations=easy_iterations,
         )
         t0 = time.perf_counter()

@@ -3,7 +3,8 @@
 The viscous term of pseudo-transient relaxation (:class:`tapecoil.core.stepping.Relaxation`
 drives its coefficient) and the magnitudes behind the round-off floor of the convergence test
 (:mod:`tapecoil.core.convergence`). Both take the shell first and are also its methods
-(``model.relaxation(h_e)``, ``model.rounding_scale()``).
+(``model.relaxation(h_e)``, ``model.rounding_scale()``). The relaxation's first viscosity,
+:func:`relaxation_scale`, is every relaxed solve's.
 """
 
 from __future__ import annotations
@@ -52,3 +53,12 @@ def relaxation(shell: NaghdiShell, length_scale: float):
         * shell.dx
     )
     return coefficient, previous, form
+
+
+def relaxation_scale(bending, element: float) -> float:
+    """The first viscosity [N/m^3] of pseudo-transient relaxation (the ``scale`` of
+    :class:`~tapecoil.core.stepping.Relaxation`) on a shell of the rigidities ``bending`` (a
+    :class:`~tapecoil.theory.laminate.Bending`) and elements ``element`` [m] long."""
+    # ten times the bending stiffness per unit area of the shortest wave the mesh holds (D11 / h_e^4):
+    # the first pseudo-time step damps every bending mode, and the relaxation lowers it from there
+    return 10 * bending.D11 / element**4

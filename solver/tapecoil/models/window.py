@@ -356,7 +356,7 @@ def carry_over(old, new) -> None:
         tie.turned.value[:] = Q
     if old.beam is not None:  # a full shell's load parameter is its own phase's
         new.beam.committed_load = old.beam.committed_load
-    new._set_load(new.beam.committed_load)
+    new.set_load(new.beam.committed_load)
     for edge, tie in new.ties.items():
         kept = old.ties.get(edge)
         if (

@@ -46,8 +46,10 @@ from tapecoil.models.edges import facet_condition
 from tapecoil.phases.predictors import CoilingPredictor, choose_predictor
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
-# the pull at the free end rises with the flattening; the guide line is the hub's top tangent
-_GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
+# the free end's guide, the full shell's and the hybrid window's: its displacement across and
+# normal to the guide line (the hub's top tangent) and its rotations held, so that the pull
+# draws it along the line
+GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
 
 # The free part a coiling needs at its end (:func:`free_end_room`), in elements at the free end
 # and in lengths of the guide line inside the coil: the smallest that the coarse and the default
@@ -131,7 +133,7 @@ class CoilingModel:
         strip, model = self.strip, self.model
 
         free_end = strip.facet_tags.find(FREE_END)
-        self.guide = [facet_condition(model, sub, free_end) for sub in _GUIDE_COMPONENTS]
+        self.guide = [facet_condition(model, sub, free_end) for sub in GUIDE_COMPONENTS]
         bcs = self.root.bcs + [bc for _, bc in self.guide]
         self.tension = dolfinx.fem.Constant(strip.mesh, 0.0)
         self.bcs = bcs

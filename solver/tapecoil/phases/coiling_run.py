@@ -22,10 +22,11 @@ from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation
 from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_measure, ploy_measure
+from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.phases.coiling import CoilingModel, check_free_end_room, read_checkpoint, write_checkpoint
 from tapecoil.phases.coiling_rows import CoilingRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
-from tapecoil.phases.stepped import SteppedRun
+from tapecoil.phases.stepped import EASY_ITERATIONS, SteppedRun
 
 
 @dataclass
@@ -45,8 +46,7 @@ class CoilingRun(SteppedRun):
     its row (:class:`~tapecoil.phases.coiling_rows.CoilingRows`).
     """
 
-    # the step grows after steps that converge in at most this many Newton iterations
-    easy_iterations = 8
+    easy_iterations = EASY_ITERATIONS
     # the largest step [rad] of each predictor, unless coiling.max_step sets one: the shift
     # predicts a turning hub's state well enough for long steps, fewer in all than shorter ones
     # take; the secant needs short ones (the benchmark's counts: docs/notes/coiling.md)
@@ -83,7 +83,7 @@ class CoilingRun(SteppedRun):
         relax = Relaxation(
             m.viscosity,
             m.previous,
-            scale=10 * m.config.wall.bending.D11 / m.element_length**4,
+            scale=relaxation_scale(m.config.wall.bending, m.element_length),
             max_iterations=100,
         )
         return Continuation(

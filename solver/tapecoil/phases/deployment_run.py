@@ -25,8 +25,9 @@ from tapecoil.phases.deployment import (
     write_deployment_checkpoint,
 )
 from tapecoil.phases.deployment_rows import DeploymentRows
+from tapecoil.phases.release import smallest_time_step, time_legs
 from tapecoil.phases.runner import LOG, Phase, run_phase
-from tapecoil.phases.stepped import SteppedRun
+from tapecoil.phases.stepped import EASY_ITERATIONS, SteppedRun
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
@@ -52,9 +53,7 @@ class DeploymentRun(SteppedRun):
     (:class:`~tapecoil.phases.deployment_rows.DeploymentRows`).
     """
 
-    # the step grows after steps of at most this many Newton iterations: a stricter bound keeps
-    # the steps short where the deployment would take longer ones, for more steps in all
-    easy_iterations = 8
+    easy_iterations = EASY_ITERATIONS
 
     def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None, stop=None):
         super().__init__(DeploymentResult(), on_step, stop)
@@ -98,8 +97,7 @@ class DeploymentRun(SteppedRun):
         if not self._restored:
             m.initial_acceleration()
             self._record(self.rows.row(0.0, None))
-        # absolute step limits [s], whatever the span left (a restart steps as the first run)
-        smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
+        smallest = smallest_time_step(d.t_end, d.dt)
 
         def control(max_dt, span):
             """Step limits [s] as the fractions of the phase's span the continuation works in."""
@@ -132,13 +130,8 @@ class DeploymentRun(SteppedRun):
                 raise _Deployed
             self._check_stop(m.comm)
 
-        # the release in steps of at most a twentieth of it: the hold's spring is stiff and
-        # its work is integrated over the steps; then the steps grow to max_dt
-        release = min(m.hold.release_time, d.t_end)
-        phases = [(release, min(release / 20, d.dt))] if release > 0 else []
-        phases.append((d.t_end, max(self.max_dt, d.dt)))
         try:
-            for end, max_dt in phases:
+            for end, max_dt in time_legs(m.hold.release_time, d.t_end, d.dt, self.max_dt):
                 if end <= self.time:
                     continue
                 cont = Continuation(

@@ -37,16 +37,18 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.config.model import hybrid_coiling_need
 from tapecoil.contact.surface import BeamStripSurface, JoinedSurface, ShellSurface
 from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import MeshResolution
-from tapecoil.hub.contact import default_penalty, root_fairing, spiral_obstacle
+from tapecoil.hub.contact import ContactSettings, root_fairing, spiral_obstacle
 from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.payout import OUTER_STATION, STATION_MARGIN, outer_station
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.hybrid_problem import HybridProblem
+from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.models.tape_beam import tape_beam
 from tapecoil.models.window import carry_over, full_shell
 from tapecoil.models.window_settling import settle_placed
@@ -54,13 +56,11 @@ from tapecoil.phases.coiling_run import CoilingRun
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.predictors import choose_predictor, wound_length
 from tapecoil.phases.root_loads import HybridRootLoads
+from tapecoil.phases.stepped import EASY_ITERATIONS, clock_origin, last_wall_time
 from tapecoil.phases.turn_contact import TurnContact
-from tapecoil.phases.window_on_hub import ContactSettings, WindowOnHub
+from tapecoil.phases.window_on_hub import WindowOnHub
 
 __all__ = ["HybridCoiling", "WindowSettings"]
-
-# the step grows after steps of at most this many Newton iterations (the full shell's coiling's)
-EASY_ITERATIONS = 8
 
 
 @dataclass(frozen=True)
@@ -136,11 +136,10 @@ class HybridCoiling:
         self.first_step, self.max_step = first_step, max_step
         config = self.config
         tp, cc = config.tape, config.contact
-        if config.coiling.sense != "opposite":
-            raise ValueError("the hybrid coils in the opposite sense only: coiling.sense must be 'opposite'")
+        need = hybrid_coiling_need(config)
+        if need is not None:
+            raise ValueError(f"the hybrid coils only with {need}")
         resolution = MeshResolution.from_config(config.mesh, tp.L)
-        if resolution.grading != 1.0:
-            raise ValueError("the hybrid's shell and beam share their nodes: mesh.grading must be 1")
         self.element = tp.L / resolution.along
         self.window_length = self.element * math.ceil((self.window.ahead + self.window.behind) / self.element)
         if self.window_length >= tp.L:
@@ -165,17 +164,7 @@ class HybridCoiling:
             **config.coiling.petsc_options,
         }
         self.centroid = BeamSection.arc_centroid_depth(tp.R, tp.alpha)
-        penalty = cc.penalty or cc.penalty_scale * default_penalty(
-            config.wall.axial_modulus, tp.h, self.element
-        )
-        self.contact = ContactSettings(
-            penalty,
-            math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1,
-            max(2 * self.element / config.hub.radius, 0.3),
-            cc.smoothing * tp.h,
-            cc.turns,
-            cc.search_margin * tp.h,
-        )
+        self.contact = ContactSettings.from_config(config, self.element)
         self.angle = 0.0
         self.pull = config.coiling.tension  # [N] at the free end (a payout may set its own)
         self.records: list[CoilingRecord] = []
@@ -311,7 +300,7 @@ class HybridCoiling:
     def coil_geometry(self) -> dict[str, float]:
         """The coiled length [m], the material behind the lift-off (the point wound by the hub
         angle), and the outer coil radius [m], that of the outer face half a turn behind it, as
-        the full shell's (:func:`~tapecoil.phases.centre_line.coil_geometry`; collective)."""
+        the full shell's (:func:`~tapecoil.measures.centre_line.coil_geometry`; collective)."""
         x, points = centre_line(self.hybrid)
         psi = np.maximum.accumulate(winding_along(self.frame, self.angle, points))
         radius = self.frame.polar(points.T)[0]
@@ -427,7 +416,7 @@ class HybridCoiling:
         )
         h.shell.flattening = False
         h.beam.committed_load = 0.0
-        h._set_load(0.0)
+        h.set_load(0.0)
         return records
 
     def coil(self, final_angle: float, on_step=None, stops: tuple[float, ...] = ()) -> None:
@@ -474,7 +463,7 @@ class HybridCoiling:
                 first_step=first,
                 max_step=leg_step,
                 min_step=1e-6,
-                relaxation=10 * bending.D11 / self.element**4,
+                relaxation=relaxation_scale(bending, self.element),
                 on_step=record,
                 solver_config=self.config.solver,
                 options=self.petsc_options,
@@ -507,7 +496,7 @@ class HybridCoiling:
         self._leg = None if state["leg"] is None else tuple(state["leg"])
         self.hybrid = self.build(self.moves[-1][1], f"hybrid_coil{len(self.moves) - 1}")
         self.hybrid.set_state(tables)
-        self._t0 = time.perf_counter() - (self.records[-1].wall_time if self.records else 0.0)
+        self._t0 = clock_origin(last_wall_time(self.records))
 
     def carry_into(self, model, hybrid: HybridProblem | None = None, angle: float | None = None) -> None:
         """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingModel` of

@@ -48,6 +48,7 @@ from tapecoil.phases.coiling import CoilingModel, write_checkpoint
 from tapecoil.phases.coiling_run import HubTurningPhase, write_coiled_cells
 from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings
 from tapecoil.phases.runner import LOG, run_phase
+from tapecoil.phases.stepped import clock_origin, last_wall_time
 
 __all__ = ["HybridCoilingPhase", "run_hybrid_coiling", "settle"]
 
@@ -79,7 +80,7 @@ class HybridCoilingPhase(HubTurningPhase):
         self.completed = completed
         self.coiling = coiling
         self._cells = None
-        self._t0 = time.perf_counter() - (self.history[-1]["wall_time"] if self.history else 0.0)
+        self._t0 = clock_origin(last_wall_time(self.history))
 
     def restart_state(self) -> dict:
         return {

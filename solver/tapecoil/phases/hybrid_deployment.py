@@ -81,8 +81,9 @@ from tapecoil.phases.free_hub import section_moment
 from tapecoil.phases.hybrid_deployment_measures import HybridDeploymentMeasures, coiled_along
 from tapecoil.phases.hybrid_free_hub import HybridFreeHub
 from tapecoil.phases.hybrid_motion import HybridMotion
-from tapecoil.phases.release import EndHold
+from tapecoil.phases.release import EndHold, smallest_time_step, time_legs
 from tapecoil.phases.root_loads import HybridRootLoads
+from tapecoil.phases.stepped import EASY_ITERATIONS, clock_origin, last_wall_time
 
 __all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment"]
 
@@ -468,12 +469,10 @@ class HybridDeployment:
         back, the last converged state kept."""
         cfg = self.config
         d = cfg.deployment
-        t0 = time.perf_counter() - (self.records[-1].wall_time if self._resumed and self.records else 0.0)
-        smallest = min(1e-6 * d.t_end, 1e-3 * d.dt)
-        release = min(d.release_time, d.t_end)
-        phases = [(release, min(release / 20, d.dt))] if release > 0 else []
-        phases.append((d.t_end, max(d.max_dt, d.dt)))
-        if release <= 0 and self.hold is not None:
+        t0 = clock_origin(last_wall_time(self.records) if self._resumed else 0.0)
+        smallest = smallest_time_step(d.t_end, d.dt)
+        legs = time_legs(d.release_time, d.t_end, d.dt, d.max_dt)
+        if len(legs) == 1 and self.hold is not None:  # no release leg: the end let go at once
             self.hold.release(0.0)
         if self._resumed and self.records:
             # what the stopped run did after its last step: stop there, or move the window
@@ -492,7 +491,7 @@ class HybridDeployment:
                 on_step(record)
             self._after_step(record)
 
-        for end, max_dt in phases:
+        for end, max_dt in legs:
             while self.time < end * (1 - 1e-12) and self.outcome != "deployed":
                 self._leg(end, max_dt, smallest, converged)
             if self.outcome == "deployed":
@@ -559,7 +558,7 @@ class HybridDeployment:
             predict=predict,
             error=self.step_error if d.error_tolerance > 0 else None,
             commit=lambda: self._commit(motion),
-            easy_iterations=8,
+            easy_iterations=EASY_ITERATIONS,
         )
         continuation.on_step = lambda step: converged(step, end)
         first, self.next_step = self.next_step, None

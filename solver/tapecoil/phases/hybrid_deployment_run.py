@@ -32,6 +32,7 @@ from tapecoil.measures.deployment import root_load_peaks
 from tapecoil.phases.deployment_run import deployment_summary, step_figures
 from tapecoil.phases.hybrid_deployment import DeploymentRecord, HybridDeployment
 from tapecoil.phases.runner import LOG, Phase, run_phase
+from tapecoil.phases.stepped import clock_origin, last_wall_time
 
 __all__ = ["HybridDeploymentPhase", "run_hybrid_deployment"]
 
@@ -71,7 +72,7 @@ class HybridDeploymentPhase(Phase):
             self.moves = restart.get("moves", [])
             self.dofs = restart.get("dofs", 0)
             self._stowed_energy = restart.get("stowed_energy", 0.0)
-        self._t0 = time.perf_counter() - (self.history[-1]["wall_time"] if self.history else 0.0)
+        self._t0 = clock_origin(last_wall_time(self.history))
 
     # -- the runner's hooks ---------------------------------------------------------------------
     def position(self) -> float:

@@ -3,7 +3,7 @@ the shell's and the beam's.
 
 The tape's root is attached to the hub: the flattened beam's root node while the window starts
 past the root, the window's root edge once it starts there. Its dofs are prescribed, g(zeta),
-by the hub angle zeta (the hybrid's load parameter, :meth:`HybridProblem._set_load`). The hub
+by the hub angle zeta (the hybrid's load parameter, :meth:`HybridProblem.set_load`). The hub
 (:class:`~tapecoil.hub.rotor.HubRotor`) obeys, as with the full shell
 (:mod:`tapecoil.phases.free_hub`),
 
@@ -67,7 +67,7 @@ class HybridFreeHub(HubNewton):
 
     def place(self, angle: float) -> None:
         """The root (the beam's clamp or the window's attachment) at the hub angle ``angle``."""
-        self.hybrid._set_load(angle)
+        self.hybrid.set_load(angle)
 
     def _blocks(self, values: np.ndarray) -> list[np.ndarray]:
         """``values`` over the owned dofs of shell and beam, one after the other, split by block."""

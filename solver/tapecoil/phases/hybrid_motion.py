@@ -127,7 +127,7 @@ class HybridMotion:
 
     def set_load(self, value: float) -> None:
         """The hybrid's load parameter (its loads per unit load) from now on."""
-        self.hybrid._set_load(value)
+        self.hybrid.set_load(value)
         self.hybrid.beam.committed_load = value
 
     def step(self, dt: float):
@@ -177,7 +177,7 @@ class HybridMotion:
         step from a zero rotation."""
         for scheme in self.schemes:
             scheme.advance()
-        self.hybrid._commit()
+        self.hybrid.commit()
         self.beam.committed()
 
     def destroy(self) -> None:

@@ -5,12 +5,11 @@ coiling adds the guide, the pull, its solver and predictor; the deployment the i
 release and its time stepping. A checkpoint of any phase holds this state (the shell's state and
 the winding angles), so a phase starts from another's checkpoint by reading this alone, without
 building the other phase's forms or solver. The turns' contact with each other is
-:mod:`~tapecoil.phases.turn_contact`'s, the centre-line measures :mod:`~tapecoil.phases.centre_line`'s.
+:mod:`~tapecoil.phases.turn_contact`'s, the centre-line measures :mod:`~tapecoil.measures.centre_line`'s.
 """
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import dolfinx
@@ -27,11 +26,11 @@ from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_str
 from tapecoil.geometry.sections import CircularArcSection
 from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
-from tapecoil.hub.contact import CoilContact, default_penalty
+from tapecoil.hub.contact import CoilContact, ContactSettings
 from tapecoil.hub.frame import HubFrame
+from tapecoil.measures import centre_line as centre
 from tapecoil.models.edges import owned_edge_dofs
 from tapecoil.models.shell import NaghdiShell, shell_material
-from tapecoil.phases import centre_line as centre
 from tapecoil.phases.turn_contact import TurnContact
 
 
@@ -62,21 +61,16 @@ class TapeOnHub:
         self.frame = HubFrame(r_hub, tp.h, config.coiling.sense)
         self.root = HubRoot(model, ROOT, self.frame, CircularArcSection.from_tape(tp))
 
-        cc = config.contact
-        self.penalty = cc.penalty or cc.penalty_scale * default_penalty(
-            config.wall.axial_modulus, tp.h, self.element_length
+        cs = ContactSettings.from_config(config, self.element_length)
+        self.penalty = cs.penalty
+        self.contact = CoilContact(
+            model, self.frame, cs.penalty, cs.max_turns, cs.ramp_width, cs.smoothing, cs.turns
         )
-        max_turns = math.ceil((config.coiling.hub_angle + math.pi) / (2 * math.pi)) + 1
-        # the climb over the root end spread over about two elements (at least 0.3 rad)
-        ramp = max(2 * self.element_length / r_hub, 0.3)
-        smoothing = cc.smoothing * tp.h
-        self.contact = CoilContact(model, self.frame, self.penalty, max_turns, ramp, smoothing, cc.turns)
         self.contact.reset()
         self.turns = None
-        if cc.turns == "surface":
-            buffer = cc.search_margin * tp.h
+        if cs.turns == "surface":
             self.turns = TurnContact(
-                ShellSurface(model, self.contact.nodes), self.frame, tp.h, self.penalty, smoothing, buffer
+                ShellSurface(model, self.contact.nodes), self.frame, tp.h, cs.penalty, cs.smoothing, cs.buffer
             )
         # strain + contact energy as forms (the turns' real contact is assembled on its own:
         # add_self_contact_force)

@@ -5,8 +5,6 @@ there (unless released: a deploying tape's), and the coiling's predictors for th
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import dolfinx
 import numpy as np
 import ufl
@@ -18,32 +16,17 @@ from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
 from tapecoil.geometry.sections import CircularArcSection
 from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
-from tapecoil.hub.contact import CoilContact
+from tapecoil.hub.contact import CoilContact, ContactSettings
 from tapecoil.hub.frame import HubFrame
 from tapecoil.measures.section_forces import SectionForces
 from tapecoil.models.edges import facet_condition, owned_edge_dofs
 from tapecoil.models.materials import shell_material
 from tapecoil.models.nodes import Nodes
 from tapecoil.models.problem import ShellProblem
+from tapecoil.phases.coiling import GUIDE_COMPONENTS
 from tapecoil.phases.predictors import AlongTape, turn_wound, wound_length
 
-__all__ = ["ContactSettings", "WindowOnHub"]
-
-# the free end's guide (as the full shell's coiling): displacement across and normal to the line
-# and the end's rotations held
-_GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
-
-
-@dataclass
-class ContactSettings:
-    """The hub's and the turns' contact, the shell's and the beam's alike (as :class:`TapeOnHub`'s)."""
-
-    penalty: float  # [N/m^3] per unit area of the shell
-    max_turns: int
-    ramp_width: float  # [rad]
-    smoothing: float  # [m]
-    turns: str = "surface"  # what keeps the turns apart (contact.turns)
-    buffer: float = 0.0  # [m] the search's Verlet buffer between the turns' surfaces
+__all__ = ["WindowOnHub"]
 
 
 class WindowOnHub(ShellProblem):
@@ -107,7 +90,7 @@ class WindowOnHub(ShellProblem):
         self.energy = energy
         if start + length >= tp.L * (1 - 1e-9) and not released:
             free_end = self.strip.facet_tags.find(FREE_END)
-            self.bcs += [facet_condition(model, sub, free_end)[1] for sub in _GUIDE_COMPONENTS]
+            self.bcs += [facet_condition(model, sub, free_end)[1] for sub in GUIDE_COMPONENTS]
             # T spread evenly over the free end's arc, as the full shell's pull
             pull = config.coiling.tension if pull is None else pull
             energy = energy - pull * model.u[0] / tp.b * model.ds(FREE_END)

@@ -38,9 +38,9 @@ from tapecoil.config import Config, ConfigError
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import FREE_END
+from tapecoil.measures.centre_line import edge_lines
 from tapecoil.measures.wrap import wrap_measure
 from tapecoil.models.edges import facet_condition
-from tapecoil.phases.centre_line import edge_lines
 from tapecoil.phases.coiling import CoilingModel
 from tapecoil.phases.coiling_run import CoilingRun
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from tapecoil.config import Config
 from tapecoil.theory.coil_geometry import (
     coil_radius_during_deployment,
     coiled_length_from_radius,
@@ -31,6 +31,9 @@ from tapecoil.theory.plate import (
     fold_radius,
     ploy_length,
 )
+
+if TYPE_CHECKING:  # the configuration is read, never imported: config sits above theory
+    from tapecoil.config import Config
 
 
 @dataclass(frozen=True)

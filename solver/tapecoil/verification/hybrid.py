@@ -45,6 +45,7 @@ from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.models.beam_section import BeamSection
 from tapecoil.models.hybrid_problem import HybridProblem
 from tapecoil.models.materials import ShellMaterial
+from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.models.tape_beam import tape_beam
 from tapecoil.verification.checks import CaseResult, Check
 
@@ -244,7 +245,7 @@ def hybrid_fold(
         first_step=0.01 * final_angle,
         max_step=0.02 * final_angle,
         max_cutbacks=4,
-        relaxation=10 * bending.D11 / element**4,
+        relaxation=relaxation_scale(bending, element),
         on_step=record,
         solver_config=config.solver,
     )

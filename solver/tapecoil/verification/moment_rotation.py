@@ -53,6 +53,7 @@ from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, create_stri
 from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.models.edges import RigidSection
 from tapecoil.models.shell import NaghdiShell, shell_material
+from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.models.supports import fixed_point, symmetry_plane
 from tapecoil.verification.checks import CaseResult, Check, solver_prefix
 
@@ -111,8 +112,7 @@ class BentTape:
         self.h_e = length / 2 / resolution.along
         self.viscosity, previous, viscous = model.relaxation(length_scale=self.h_e)
         self.previous = previous
-        # the relaxation's first viscosity: as the tape fold's (verification.tape)
-        self.relaxation_scale = 10 * config.wall.bending.D11 / self.h_e**4
+        self.relaxation_scale = relaxation_scale(config.wall.bending, self.h_e)
         F = ufl.derivative(self.energy, model.q, model.dq) + viscous
         self.prefix = solver_prefix(name)
         self.solver = SNESSolver.from_config(

@@ -21,6 +21,7 @@ from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, create_stri
 from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.models.edges import EdgeMotion, clamp
 from tapecoil.models.shell import NaghdiShell, shell_material
+from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.verification.checks import (
     CaseResult,
     Check,
@@ -209,7 +210,7 @@ def tape_fold(
             on_step(step, end.angle, energy)
 
     bending = config.wall.bending
-    relax = Relaxation(c, previous, scale=10 * bending.D11 / h_e**4)
+    relax = Relaxation(c, previous, scale=relaxation_scale(bending, h_e))
     t0 = time.perf_counter()
     try:
         Continuation(solver.solve, end.set, model.q, control, relaxation=relax, on_step=record).run(
