@@ -33,11 +33,10 @@ import dolfinx.fem.petsc
 import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
+from stowed_solver import stowed_solver
 
-from tapecoil.config import load_config
 from tapecoil.contact.term import SelfContactTerm, add_blocks
 from tapecoil.core import compat
-from tapecoil.phases.coiling import read_checkpoint
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("stowed", type=Path, help="checkpoint directory (a coiling run's stowed/)")
@@ -54,14 +53,7 @@ parser.add_argument(
 args = parser.parse_args()
 
 comm = MPI.COMM_WORLD
-config = load_config(args.stowed.parent / "config.toml")
-model, _meta = read_checkpoint(args.stowed, config, comm)
-solver = model.solver
-for term in solver.terms:
-    term.begin()
-model.model.q.x.petsc_vec.copy(solver.x)
-solver._use_operator()
-solver._jacobian(None, solver.x, solver.A, solver.A)
+model, solver = stowed_solver(args.stowed, comm, operator=True)
 A = solver.A
 J = solver._operator
 J.assemble() if J is not None else None

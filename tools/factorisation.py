@@ -21,10 +21,9 @@ from pathlib import Path
 import dolfinx.fem.petsc
 from mpi4py import MPI
 from petsc4py import PETSc
+from stowed_solver import stowed_solver
 
-from tapecoil.config import load_config
 from tapecoil.core import compat
-from tapecoil.phases.coiling import read_checkpoint
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("stowed", type=Path, help="checkpoint directory (a coiling run's stowed/)")
@@ -33,14 +32,7 @@ parser.add_argument("--repeat", type=int, default=3, help="factorisations timed 
 args = parser.parse_args()
 
 comm = MPI.COMM_WORLD
-config = load_config(args.stowed.parent / "config.toml")
-model, _meta = read_checkpoint(args.stowed, config, comm)
-solver = model.solver
-for term in solver.terms:
-    term.begin()
-# the solver assembles at its vector x: the checkpoint's state, not the zero it starts as
-model.model.q.x.petsc_vec.copy(solver.x)
-solver._jacobian(None, solver.x, solver.A, solver.A)
+model, solver = stowed_solver(args.stowed, comm)
 shell = dolfinx.fem.petsc.create_matrix(solver.J_form)
 compat.assemble_matrix(shell, solver.J_form, solver.bcs)
 shell.assemble()
