@@ -25,7 +25,7 @@ from tapecoil.config import load_config
 from tapecoil.measures.deployment import at_crossing, deployment_reference
 from tapecoil.phases.coiling_run import run_coiling
 from tapecoil.phases.deployment_run import run_deployment
-from tapecoil.post.plots import free_hub_figure, read_history
+from tapecoil.post.plots import free_hub_figure, model_name, read_history
 
 
 def main() -> None:
@@ -79,7 +79,11 @@ def main() -> None:
             f"turn {turn:.3f} / {turn_ref:.3f} rad ({turn / turn_ref - 1:+.1%})"
         )
     free_hub_figure(
-        read_history(out / "deployment_history.csv"), config, history[0]["lambda"], out / "free_hub.png"
+        read_history(out / "deployment_history.csv"),
+        config,
+        history[0]["lambda"],
+        out / "free_hub.png",
+        model_name(run),
     )
     released = [r for r in history if r["time"] > 1.5 * config.deployment.release_time]
     H = np.array([r["angular_momentum"] for r in released])

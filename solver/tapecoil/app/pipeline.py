@@ -32,12 +32,13 @@ def run(
     """Run ``phases`` into ``directory`` and return its summary (also written as summary.json).
 
     ``phases``: ("coiling",), ("deployment",) (from the checkpoint ``stowed``) or both, the
-    deployment starting from the coiling's stowed state; the coiling by ``config.model.kind``'s
-    model (the hybrid's: :mod:`tapecoil.phases.hybrid_coiling_run`, its stowed state the full
-    shell's); "payout" in place of "deployment" pays
-    the tape out with a driven hub instead (:mod:`tapecoil.phases.payout`; the hybrid's:
-    :mod:`tapecoil.phases.hybrid_payout`, from its own coil). With ``model.kind = "hybrid"`` a
-    deployment or payout alone starts from the hybrid's coil in the stowed checkpoint of a
+    deployment starting from the coiling's stowed state; each phase by the model that
+    ``config.model.kind`` names (:mod:`tapecoil.phases.models`; the hybrid's coiling:
+    :mod:`tapecoil.phases.hybrid_coiling_run`, its stowed state the full shell's); "payout" in
+    place of "deployment" pays the tape out with a driven hub instead
+    (:mod:`tapecoil.phases.payout`; the hybrid's: :mod:`tapecoil.phases.hybrid_payout`, from its
+    own coil). With ``model.kind = "hybrid"`` a deployment or payout alone starts from the
+    hybrid's coil in the stowed checkpoint of a
     coiling by the hybrid. ``resume``: go on
     from the directory's own checkpoints (stowed/, deployed/, paid_out/) as if the run had never stopped;
     ``coiling_checkpoint``: resume the coiling from that checkpoint instead. A stop signal (see
@@ -47,16 +48,11 @@ def run(
     """
     from tapecoil.config.model import hybrid_deployment_need
     from tapecoil.config.params import ConfigError
-    from tapecoil.phases.coiling_run import run_coiling
-    from tapecoil.phases.deployment_run import run_deployment
-    from tapecoil.phases.hybrid_coiling_run import run_hybrid_coiling
-    from tapecoil.phases.hybrid_deployment_run import run_hybrid_deployment
-    from tapecoil.phases.hybrid_payout import run_hybrid_payout
-    from tapecoil.phases.payout import run_payout
+    from tapecoil.phases.models import for_config
 
     if "deployment" in phases and "payout" in phases:
         raise ValueError("a run deploys the stowed tape or pays it out, not both")
-    hybrid = config.model.kind == "hybrid"
+    tape_model = for_config(config)
     if "deployment" in phases:
         need = hybrid_deployment_need(config)
         if need is not None:
@@ -71,75 +67,23 @@ def run(
         )
         out: dict = {}
         with StopSignals() as stop:
-            model = hybrid_coiling = None
+            coiled = None
             if "coiling" in phases:
                 resume_coil = coiling_checkpoint or (
                     own_stowed if resume and is_checkpoint(own_stowed) else None
                 )
-                coiling_args = (config, directory, comm)
-                coiling_kwargs = {"resume": resume_coil, "progress": progress, "stop": stop}
-                if hybrid:
-                    out["coiling"], model, hybrid_coiling = run_hybrid_coiling(
-                        *coiling_args, **coiling_kwargs
-                    )
-                else:
-                    out["coiling"], model = run_coiling(*coiling_args, **coiling_kwargs)
-            deploying = "deployment" in phases and (model is None or out["coiling"]["completed"])
-            paying_out = "payout" in phases and (model is None or out["coiling"]["completed"])
-            resume_payout = _own_checkpoint(directory / "paid_out", "payout") if resume else None
-            if paying_out and hybrid:
-                if resume_payout is None:  # a resumed payout's checkpoint holds its hybrid
-                    model, hybrid_coiling = _hybrid_start(
-                        config, comm, model, hybrid_coiling, stowed, "payout"
-                    )
-                out["payout"] = run_hybrid_payout(
-                    config,
-                    directory,
-                    comm,
-                    model,
-                    hybrid_coiling,
-                    progress=progress,
-                    stop=stop,
-                    resume=resume_payout,
+                out["coiling"], coiled = tape_model.coil(config, directory, comm, resume_coil, progress, stop)
+            deploying = "deployment" in phases and (coiled is None or out["coiling"]["completed"])
+            paying_out = "payout" in phases and (coiled is None or out["coiling"]["completed"])
+            if paying_out:
+                resume_payout = _own_checkpoint(directory / "paid_out", "payout") if resume else None
+                out["payout"] = tape_model.pay_out(
+                    config, directory, comm, coiled, stowed, resume_payout, progress, stop
                 )
-            elif paying_out:
-                out["payout"], _ = run_payout(
-                    config,
-                    directory,
-                    comm,
-                    stowed=stowed,
-                    model=model,
-                    progress=progress,
-                    stop=stop,
-                    resume=resume_payout,
-                )
-            if deploying and hybrid:
+            if deploying:
                 resume_deployment = _own_checkpoint(own_deployed, "deployment") if resume else None
-                done = resume_deployment is not None and read_meta(resume_deployment).get("completed")
-                if model is None or not done:
-                    model, hybrid_coiling = _hybrid_start(
-                        config, comm, model, hybrid_coiling, stowed, "deployment"
-                    )
-                out["deployment"] = run_hybrid_deployment(
-                    config,
-                    directory,
-                    model,
-                    hybrid_coiling,
-                    comm,
-                    progress=progress,
-                    stop=stop,
-                    resume=resume_deployment,
-                )
-            elif deploying:
-                out["deployment"], _ = run_deployment(
-                    config,
-                    directory,
-                    comm,
-                    stowed=stowed,
-                    tape=None if model is None else model.tape,
-                    progress=progress,
-                    stop=stop,
-                    resume=_own_checkpoint(own_deployed, "deployment") if resume else None,
+                out["deployment"] = tape_model.deploy(
+                    config, directory, comm, coiled, stowed, resume_deployment, progress, stop
                 )
         from tapecoil.measures.separation import separation_measure
 
@@ -154,26 +98,6 @@ def run(
     finally:
         results.stop_log(handler)
     return summary
-
-
-def _hybrid_start(config: Config, comm, model, coiling, stowed, phase: str):
-    """The full shell and the hybrid's own coil that the hybrid's ``phase`` (after the coiling)
-    starts from: the run's own (``model``, ``coiling``); a phase alone's from the hybrid coiling's
-    ``stowed`` checkpoint; computed again where a resumed coiling's checkpoint does not hold
-    the hybrid's state (another model's, or an older one's)."""
-    from tapecoil.phases.hybrid_coiling_run import coil_again
-    from tapecoil.phases.hybrid_payout import hybrid_coil_from
-
-    if model is None:
-        return hybrid_coil_from(stowed, config, comm)
-    if coiling is None:
-        results.LOG.warning(
-            "the hybrid's %s starts from the hybrid's own coiled state, which the stowed "
-            "checkpoint does not hold: coiling with the hybrid again",
-            phase,
-        )
-        coiling = coil_again(config, comm)
-    return model, coiling
 
 
 def _own_checkpoint(path: Path, phase: str) -> Path | None:

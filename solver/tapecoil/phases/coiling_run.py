@@ -25,6 +25,7 @@ from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_me
 from tapecoil.models.solver_terms import relaxation_scale
 from tapecoil.phases.coiling import CoilingModel, check_free_end_room, read_checkpoint, write_checkpoint
 from tapecoil.phases.coiling_rows import CoilingRows
+from tapecoil.phases.model_tag import by_hybrid
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.stepped import EASY_ITERATIONS, SteppedRun
 
@@ -315,7 +316,7 @@ def run_coiling(
         restart = meta.get("run")
         if restart is None:
             raise ValueError(f"{resume} holds no coiling restart state")
-        if restart.get("model") == "hybrid":
+        if by_hybrid(restart):
             raise ValueError(f"{resume} is the hybrid model's coiling: resume it with model.kind = 'hybrid'")
     else:
         model = CoilingModel(config, comm)

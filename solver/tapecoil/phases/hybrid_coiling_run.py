@@ -47,6 +47,7 @@ from tapecoil.models.nodes import Nodes
 from tapecoil.phases.coiling import CoilingModel, write_checkpoint
 from tapecoil.phases.coiling_run import HubTurningPhase, write_coiled_cells
 from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings
+from tapecoil.phases.model_tag import HYBRID, KEY, by_hybrid
 from tapecoil.phases.runner import LOG, run_phase
 from tapecoil.phases.stepped import clock_origin, last_wall_time
 
@@ -84,7 +85,7 @@ class HybridCoilingPhase(HubTurningPhase):
 
     def restart_state(self) -> dict:
         return {
-            "model": "hybrid",
+            KEY: HYBRID,
             "history": self.history,
             "settling": self.settling,
             "windows": self.windows,
@@ -198,7 +199,7 @@ class HybridCoilingPhase(HubTurningPhase):
         hybrid's own: its model, its windows and the settling's solve."""
         history, res = self.history, self.model.strip.resolution
         return {
-            "model": "hybrid",
+            KEY: HYBRID,
             "ranks": self.comm.size,
             "dofs": max((int(r["dofs"]) for r in history), default=0),
             "full_shell_dofs": global_size(self.model.model.W),
@@ -286,7 +287,7 @@ def run_hybrid_coiling(
         meta = read_meta(resume)
         restart = meta.get("run") or {}
         tables = read_tables(resume)
-        ours = restart.get("model") == "hybrid"
+        ours = by_hybrid(restart)
         resumable = ours and tables is not None and restart.get("coiling") is not None
         if resumable or (ours and meta.get("completed")):
             model, _ = read_checkpoint(resume, config, comm)

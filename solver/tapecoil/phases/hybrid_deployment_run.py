@@ -31,6 +31,7 @@ from tapecoil.config import Config
 from tapecoil.measures.deployment import root_load_peaks
 from tapecoil.phases.deployment_run import deployment_summary, step_figures
 from tapecoil.phases.hybrid_deployment import DeploymentRecord, HybridDeployment
+from tapecoil.phases.model_tag import HYBRID, KEY, by_hybrid
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.stepped import clock_origin, last_wall_time
 
@@ -85,7 +86,7 @@ class HybridDeploymentPhase(Phase):
     def restart_state(self) -> dict:
         deployment = self.deployment if self._restartable() else None
         return {
-            "model": "hybrid",
+            KEY: HYBRID,
             "history": self.history,
             "moves": self.moves,
             "dofs": self.dofs,
@@ -198,7 +199,7 @@ class HybridDeploymentPhase(Phase):
             # (a checkpoint of a hybrid run from before the root's loads were read has none)
             **(root_load_peaks(history) if "root_torque" in history[0] else {}),
             "run": {
-                "model": "hybrid",
+                KEY: HYBRID,
                 "ranks": self.comm.size,
                 "dofs": self.dofs,
                 "mesh": f"{res.along} x {res.across}",
@@ -239,7 +240,7 @@ def run_hybrid_deployment(
     if resume is not None:
         meta = read_meta(resume)
         restart = meta.get("run") or {}
-        ours = restart.get("model") == "hybrid"
+        ours = by_hybrid(restart)
         if meta.get("completed") and ours:
             LOG.info("hybrid deployment: completed in %s", resume)
             phase = HybridDeploymentPhase(config, model, restart=restart, completed=True)

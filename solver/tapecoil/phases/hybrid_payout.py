@@ -29,6 +29,7 @@ from tapecoil.core.checkpoint import read_meta, read_tables
 from tapecoil.phases.coiling import CoilingModel, read_checkpoint
 from tapecoil.phases.hybrid_coiling import HybridCoiling
 from tapecoil.phases.hybrid_coiling_run import HybridCoilingPhase
+from tapecoil.phases.model_tag import by_hybrid
 from tapecoil.phases.payout import PayoutReport, check_payout, payout_angle
 from tapecoil.phases.runner import LOG, run_phase
 
@@ -85,7 +86,7 @@ def hybrid_coil_from(
 
     meta = read_meta(stowed) if is_checkpoint(Path(stowed)) else {}
     restart = meta.get("run") or {}
-    ours = meta.get("completed") and restart.get("model") == "hybrid" and restart.get("coiling")
+    ours = meta.get("completed") and by_hybrid(restart) and restart.get("coiling")
     tables = read_tables(stowed) if ours else None
     if tables is None:
         raise ValueError(
@@ -119,7 +120,7 @@ def run_hybrid_payout(
         meta = read_meta(resume)
         restart = meta.get("run") or {}
         tables = read_tables(resume)
-        if meta.get("phase") != "payout" or restart.get("model") != "hybrid" or tables is None:
+        if meta.get("phase") != "payout" or not by_hybrid(restart) or tables is None:
             raise ValueError(f"{resume} holds no restart state of the hybrid's payout")
         model, _ = read_checkpoint(resume, config, comm)
         coiling = HybridCoiling(config, comm, restart=restart["coiling"], tables=tables)

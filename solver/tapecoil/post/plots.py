@@ -104,9 +104,10 @@ def coiling_energies(directory: Path) -> Path | None:
     return _save(fig, figures / "coiling_energies.png")
 
 
-def _model_name(config) -> str:
-    """The model a run's rows come from, for the legends."""
-    return "hybrid" if config.model.kind == "hybrid" else "shell"
+def model_name(run: dict) -> str:
+    """The model a phase's rows come from, for the legends: the tag its summary's run figures
+    carry (``run``, as summary.json holds them); the full shell writes none."""
+    return run.get("model") or "shell"
 
 
 def coiling_forces(directory: Path) -> Path | None:
@@ -115,9 +116,9 @@ def coiling_forces(directory: Path) -> Path | None:
     h = _coiling_rows(directory)
     if h is None or len(h["hub_angle"]) == 0:
         return None
-    config, _, figures = _setup(directory)
+    config, summary, figures = _setup(directory)
     tp, r_hub, T = config.tape, config.hub.radius, config.coiling.tension
-    model = _model_name(config)
+    model = model_name(summary.get("coiling", {}).get("run", {}))
     angle = h["hub_angle"]
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
     ax[0].plot(angle, h["tension"], label="pull held at the free end")
@@ -321,16 +322,16 @@ def deployment_root_loads(directory: Path) -> Path | None:
     return _save(fig, figures / "deployment_root_loads.png")
 
 
-def free_hub_figure(h: dict[str, np.ndarray], config, lam0: float, path: Path) -> Path:
-    """A free hub's turn against lambda, simulated (history ``h``) and by the free-hub model
-    from ``lam0``, and its rate against time."""
+def free_hub_figure(h: dict[str, np.ndarray], config, lam0: float, path: Path, model: str) -> Path:
+    """A free hub's turn against lambda, simulated (history ``h``, by the tape's ``model``: its
+    :func:`model_name`) and by the free-hub model from ``lam0``, and its rate against time."""
     from tapecoil.measures.deployment import deployment_reference
 
-    model = deployment_reference(config, lam0, energy="plate")
+    reference = deployment_reference(config, lam0, energy="plate")
     lam = np.linspace(lam0, 1.0, 200)
     fig, (left, right) = plt.subplots(1, 2, figsize=(10.0, 4.2))
-    left.plot(h["lambda"], h["hub_angle"] - h["hub_angle"][0], lw=2, label=config.model.kind)
-    left.plot(lam, model.hub_turn(lam), ":", label="free-hub model (angular momentum 0)")
+    left.plot(h["lambda"], h["hub_angle"] - h["hub_angle"][0], lw=2, label=model)
+    left.plot(lam, reference.hub_turn(lam), ":", label="free-hub model (angular momentum 0)")
     left.set(xlabel="deployed fraction lambda", ylabel="hub turn since release [rad]", title="free hub")
     right.plot(h["time"], h["hub_rate"])
     right.set(xlabel="time [s]", ylabel="hub rate [rad/s]", title="hub rate (coiling sense)")
@@ -344,7 +345,8 @@ def deployment_hub(directory: Path) -> Path | None:
         return None
     h, config, summary, figures = run
     lam0 = summary["deployment"]["measures"]["lambda0"]
-    return free_hub_figure(h, config, lam0, figures / "deployment_hub.png")
+    model = model_name(summary["deployment"]["run"])
+    return free_hub_figure(h, config, lam0, figures / "deployment_hub.png", model)
 
 
 def payout_forces(directory: Path) -> Path | None:
@@ -354,9 +356,9 @@ def payout_forces(directory: Path) -> Path | None:
     h = read_history(directory / "payout_history.csv")
     if h is None or len(h["hub_angle"]) == 0:
         return None
-    config, _, figures = _setup(directory)
+    config, summary, figures = _setup(directory)
     tp = config.tape
-    model = _model_name(config)
+    model = model_name(summary.get("payout", {}).get("run", {}))
     lam = h["lambda"]
     order = np.argsort(lam)
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
