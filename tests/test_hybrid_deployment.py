@@ -112,6 +112,25 @@ def check_rigid_rates_carry_over(comm):
         )
 
 
+def test_the_hybrid_steps_in_time_with_the_linear_solve_its_contact_needs():
+    """On the spiral the joint Jacobian is a Hessian (MUMPS' LDL^T); with the turns' real contact
+    it is not (the force along the partner's smoothed normal): LU of the assembled part and its
+    applied part in GMRES, as in the hybrid's coiling. LDL^T of that matrix took half of it and
+    left out the applied part: the default-mesh deployment on the surfaces stopped at 11.7 ms
+    with no step converging, where the same state restarted went on. The [deployment] options
+    override either."""
+    from tapecoil.config import ContactConfig, DeploymentConfig
+    from tapecoil.contact.term import SOLVER_OPTIONS
+    from tapecoil.phases.hybrid_deployment import deployment_options
+
+    spiral = Config()
+    assert deployment_options(spiral)["pc_type"] == "cholesky"
+    surface = dataclasses.replace(spiral, contact=ContactConfig(turns="surface"))
+    assert deployment_options(surface) == SOLVER_OPTIONS
+    mine = dataclasses.replace(surface, deployment=DeploymentConfig(petsc_options={"ksp_rtol": "1e-6"}))
+    assert deployment_options(mine) == {**SOLVER_OPTIONS, "ksp_rtol": "1e-6"}
+
+
 def test_a_rigid_spins_rates_carry_over_a_window_move():
     """A straight hybrid tape spun about an oblique axis, its window moved four elements on: the
     new shell's and beam's velocities and accelerations are the spin's (to 1e-6; central

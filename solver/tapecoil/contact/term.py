@@ -22,7 +22,15 @@ from tapecoil.contact import kernels
 from tapecoil.contact.self_contact import ContactPairs, SelfContact
 from tapecoil.core.numbering import Numbering, block_numbering
 
-__all__ = ["SOLVER_OPTIONS", "Numbering", "PairsAtState", "SelfContactTerm", "add_blocks", "block_numbering"]
+__all__ = [
+    "SOLVER_OPTIONS",
+    "Numbering",
+    "PairsAtState",
+    "SelfContactTerm",
+    "add_blocks",
+    "block_numbering",
+    "linear_solver_options",
+]
 
 
 class PairsAtState:
@@ -68,6 +76,14 @@ SOLVER_OPTIONS = {
     "ksp_rtol": 1e-8,
     "ksp_max_it": 100,
 }
+
+
+def linear_solver_options(self_contact: bool) -> dict:
+    """The linear solve of a Newton solver whose Jacobian is a Hessian (energies, penalty contact
+    with the hub or the spiral, dead loads, the hybrid's ties) unless ``self_contact`` adds the
+    turns' real contact: MUMPS' LDL^T for a Hessian, else :data:`SOLVER_OPTIONS` (LU of the
+    assembled part, the applied part in GMRES). PETSc option names without prefix."""
+    return dict(SOLVER_OPTIONS) if self_contact else {"pc_type": "cholesky"}
 
 
 def add_blocks(A: PETSc.Mat, dofs: np.ndarray, blocks: np.ndarray) -> None:

@@ -39,7 +39,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.config.model import hybrid_coiling_need
 from tapecoil.contact.surface import BeamStripSurface, JoinedSurface, ShellSurface
-from tapecoil.contact.term import SOLVER_OPTIONS
+from tapecoil.contact.term import linear_solver_options
 from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import ContinuationError
 from tapecoil.geometry.meshes import MeshResolution
@@ -152,14 +152,9 @@ class HybridCoiling:
         # the full shell's largest steps for its predictor, unless coiling.max_step sets one
         self.max_step = self.max_step or config.coiling.max_step or CoilingRun.max_steps[self.predictor]
         self.frame = HubFrame(config.hub.radius, tp.h, config.coiling.sense)
-        # on the spiral obstacle the joint Jacobian is a Hessian (the energies, the ties', dead
-        # loads, penalty contact) and the boundary conditions keep it symmetric: MUMPS LDL^T, as
-        # the full shell's coiling; the turns' real contact pushes along the partner's smoothed
-        # normal, which is not an energy's gradient: LU, its applied part in GMRES
-        # (tapecoil.contact.term); [solver] and [coiling] petsc_options override either
-        symmetric = {"pc_type": "cholesky"} if cc.turns == "spiral" else dict(SOLVER_OPTIONS)
+        # [solver] and [coiling] petsc_options override the linear solve the contact needs
         self.petsc_options = {
-            **symmetric,
+            **linear_solver_options(cc.turns == "surface"),
             **config.solver.petsc_options,
             **config.coiling.petsc_options,
         }

@@ -66,6 +66,7 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config.model import hybrid_need
+from tapecoil.contact.term import linear_solver_options
 from tapecoil.core.cell_state import gather_fields, scatter_fields
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import owned_size
@@ -85,12 +86,24 @@ from tapecoil.phases.release import EndHold, smallest_time_step, time_legs
 from tapecoil.phases.root_loads import HybridRootLoads
 from tapecoil.phases.stepped import EASY_ITERATIONS, clock_origin, last_wall_time
 
-__all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment"]
+__all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment", "deployment_options"]
 
 # the rates are carried over a window move along the motion's path over this share of the time
 # an element's length takes at the tape's fastest speed (central differences: their second order
 # error is about 1e-6 of the rates, the rounding of the acceleration's difference far below it)
 PROBE_SHARE = 1e-3
+
+
+def deployment_options(config) -> dict:
+    """The PETSc options (without prefix) of the hybrid's joint solvers in time: the linear solve
+    the contact needs (the turns' real contact is not a Hessian's: LU and its applied part in
+    GMRES, :func:`~tapecoil.contact.term.linear_solver_options`), then ``[solver]`` and
+    ``[deployment]`` petsc_options."""
+    return {
+        **linear_solver_options(config.contact.turns == "surface"),
+        **config.solver.petsc_options,
+        **config.deployment.petsc_options,
+    }
 
 
 @dataclass
@@ -195,7 +208,7 @@ class HybridDeployment:
         # the section's mass moments of inertia per unit length: density times its second
         # moments, the arc's (the flattened strip's differ, but its turns barely spin)
         self.rotary_inertia = tp.density * np.array([arc.EI2 + arc.EI3, arc.EI2, arc.EI3]) / tp.E
-        self.options = {"pc_type": "cholesky", **cfg.solver.petsc_options, **d.petsc_options}
+        self.options = deployment_options(cfg)
         self.time = 0.0
         self.external_work = 0.0
         # the flattened beam's largest gap to its turn behind the window [m] and where [m]
