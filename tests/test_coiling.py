@@ -207,14 +207,17 @@ def test_the_free_end_needs_room_for_its_elements_and_to_come_off_the_coil():
 
 
 @pytest.mark.slow
-def test_the_largest_hub_angle_the_coarse_mesh_accepts_coils_to_completion(coil_last_row):
+def test_the_largest_hub_angle_the_coarse_mesh_accepts_coils_to_completion(tmp_path):
     """Slow (`make validate`): the coarse benchmark at the largest hub angle its free end's room
-    accepts (36.42 rad, 25.4 mm free) coils to it, the tape kept within contact.stop_penetration
-    of its turns."""
+    accepts (36.42 rad, 25.4 mm free), coiled as `tapecoil coil` coils it, reaches that angle,
+    the tape kept within contact.stop_penetration of its turns."""
+    from tapecoil.phases.coiling_run import run_coiling
+
     coarse = dataclasses.replace(Config().mesh, preset="coarse")
     config = dataclasses.replace(Config(), coiling=CoilingConfig(hub_angle=36.42), mesh=coarse)
-    row = coil_last_row(config, MPI.COMM_WORLD, 36.42)
-    assert row["hub_angle"] == pytest.approx(36.42, abs=1e-9)
+    summary, _ = run_coiling(config, tmp_path, MPI.COMM_WORLD, progress=False)
+    assert summary["completed"], summary.get("message")
+    assert summary["hub_angle"] == pytest.approx(36.42, abs=1e-9)
 
 
 def test_a_tape_that_sinks_too_deep_stops_the_run_with_the_last_accepted_state():
