@@ -74,7 +74,7 @@ def test_coil_refuses_a_hub_angle_longer_than_the_tape(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("mesh", "angle", "reason"),
     [
-        ("coarse", 37.0, "on this mesh (2 elements at the free end"),
+        ("coarse", 37.0, "on this mesh (2.4 elements at the free end"),
         ("default", 37.7, "to bend from the coil's outer turn down onto the guide line"),
     ],
 )

@@ -54,7 +54,7 @@ GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
 # The free part a coiling needs at its end (:func:`free_end_room`), in elements at the free end
 # and in lengths of the guide line inside the coil: the smallest that the coarse and the default
 # meshes coil through, measured (docs/notes/coiling.md, *Room for the free end*)
-_ROOM_ELEMENTS = 2.0
+_ROOM_ELEMENTS = 2.4
 _ROOM_INSIDE = 2.5
 
 
