@@ -55,7 +55,7 @@ GUIDE_COMPONENTS = ((0, 1), (0, 2), (1,))
 # and in lengths of the guide line inside the coil: the smallest that the coarse and the default
 # meshes coil through, measured (docs/notes/coiling.md, *Room for the free end*)
 _ROOM_ELEMENTS = 2.4
-_ROOM_INSIDE = 2.5
+_ROOM_INSIDE = 2.7
 
 
 def free_end_room(config: Config) -> tuple[float, float, float]:
