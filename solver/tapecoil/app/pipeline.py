@@ -52,7 +52,6 @@ def run(
 
     if "deployment" in phases and "payout" in phases:
         raise ValueError("a run deploys the stowed tape or pays it out, not both")
-    tape_model = for_config(config)
     if "deployment" in phases:
         need = hybrid_deployment_need(config)
         if need is not None:
@@ -67,24 +66,21 @@ def run(
         )
         out: dict = {}
         with StopSignals() as stop:
+            tape_model = for_config(config, directory, comm, progress, stop)
             coiled = None
             if "coiling" in phases:
                 resume_coil = coiling_checkpoint or (
                     own_stowed if resume and is_checkpoint(own_stowed) else None
                 )
-                out["coiling"], coiled = tape_model.coil(config, directory, comm, resume_coil, progress, stop)
+                out["coiling"], coiled = tape_model.coil(resume_coil)
             deploying = "deployment" in phases and (coiled is None or out["coiling"]["completed"])
             paying_out = "payout" in phases and (coiled is None or out["coiling"]["completed"])
             if paying_out:
                 resume_payout = _own_checkpoint(directory / "paid_out", "payout") if resume else None
-                out["payout"] = tape_model.pay_out(
-                    config, directory, comm, coiled, stowed, resume_payout, progress, stop
-                )
+                out["payout"] = tape_model.pay_out(coiled, stowed, resume_payout)
             if deploying:
                 resume_deployment = _own_checkpoint(own_deployed, "deployment") if resume else None
-                out["deployment"] = tape_model.deploy(
-                    config, directory, comm, coiled, stowed, resume_deployment, progress, stop
-                )
+                out["deployment"] = tape_model.deploy(coiled, stowed, resume_deployment)
         from tapecoil.measures.separation import separation_measure
 
         for phase, phase_summary in out.items():

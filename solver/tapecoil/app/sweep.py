@@ -195,14 +195,15 @@ def run_sweep(sweep: Sweep, directory: str | Path, comm=MPI.COMM_WORLD, progress
         from tapecoil.app.checks import warn_before_coiling
         from tapecoil.phases.coiling import check_free_end_room
 
-        for case in cases:  # every case's, before any case is computed (on every rank: it raises)
+        configs = [sweep.config(case) for case in cases]
+        for case, config in zip(cases, configs, strict=True):  # before any case is computed
             try:
-                check_free_end_room(sweep.config(case))
+                check_free_end_room(config)  # on every rank: it raises
             except ConfigError as err:
                 raise ConfigError(f"sweep case {case}: {err}") from None
         if comm.rank == 0:
-            for case in cases:
-                warn_before_coiling(sweep.config(case), prefix=f"sweep case {case}: ")
+            for case, config in zip(cases, configs, strict=True):
+                warn_before_coiling(config, prefix=f"sweep case {case}: ")
     mine = [(i, case) for i, case in enumerate(cases) if i % groups == group]
     bar = None
     if progress and comm.rank == 0:

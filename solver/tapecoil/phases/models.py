@@ -36,157 +36,126 @@ class Coiled:
     hybrid: HybridCoiling | None = None
 
 
-class ShellModel:
+@dataclass
+class TapeModelRun:
+    """What every phase of one run takes, whichever the model: the configuration, the results
+    ``directory``, the communicator, whether to show progress, and the run's stop signals."""
+
+    config: Config
+    directory: Path
+    comm: object
+    progress: bool
+    stop: object
+
+
+class ShellModel(TapeModelRun):
     """The Naghdi shell over the whole tape: every phase from the stowed checkpoint's full shell."""
 
     kind = "shell"
 
-    def coil(
-        self, config: Config, directory: Path, comm, resume, progress: bool, stop
-    ) -> tuple[dict, Coiled]:
+    def coil(self, resume) -> tuple[dict, Coiled]:
         """:func:`~tapecoil.phases.coiling_run.run_coiling`: the summary and the coiled tape."""
-        summary, model = run_coiling(config, directory, comm, resume=resume, progress=progress, stop=stop)
+        summary, model = run_coiling(
+            self.config, self.directory, self.comm, resume=resume, progress=self.progress, stop=self.stop
+        )
         return summary, Coiled(model)
 
-    def pay_out(
-        self,
-        config: Config,
-        directory: Path,
-        comm,
-        coiled: Coiled | None,
-        stowed,
-        resume,
-        progress: bool,
-        stop,
-    ) -> dict:
+    def pay_out(self, coiled: Coiled | None, stowed, resume) -> dict:
         """:func:`~tapecoil.phases.payout.run_payout` from ``coiled`` (this run's coil) or ``stowed``."""
         summary, _ = run_payout(
-            config,
-            directory,
-            comm,
+            self.config,
+            self.directory,
+            self.comm,
             stowed=stowed,
             model=None if coiled is None else coiled.model,
-            progress=progress,
-            stop=stop,
+            progress=self.progress,
+            stop=self.stop,
             resume=resume,
         )
         return summary
 
-    def deploy(
-        self,
-        config: Config,
-        directory: Path,
-        comm,
-        coiled: Coiled | None,
-        stowed,
-        resume,
-        progress: bool,
-        stop,
-    ) -> dict:
+    def deploy(self, coiled: Coiled | None, stowed, resume) -> dict:
         """:func:`~tapecoil.phases.deployment_run.run_deployment` from ``coiled`` or ``stowed``."""
         summary, _ = run_deployment(
-            config,
-            directory,
-            comm,
+            self.config,
+            self.directory,
+            self.comm,
             stowed=stowed,
             tape=None if coiled is None else coiled.model.tape,
-            progress=progress,
-            stop=stop,
+            progress=self.progress,
+            stop=self.stop,
             resume=resume,
         )
         return summary
 
 
-class HybridModel:
+class HybridModel(TapeModelRun):
     """The shell-beam hybrid: a shell window on the beam. Its payout and deployment start from its
     own coiled state, which only its own coiling (or that coiling's stowed checkpoint) holds."""
 
     kind = "hybrid"
 
-    def coil(
-        self, config: Config, directory: Path, comm, resume, progress: bool, stop
-    ) -> tuple[dict, Coiled]:
+    def coil(self, resume) -> tuple[dict, Coiled]:
         """:func:`~tapecoil.phases.hybrid_coiling_run.run_hybrid_coiling`: the summary and the
         coiled tape (the full shell settled, and the hybrid's own state)."""
         summary, model, coiling = run_hybrid_coiling(
-            config, directory, comm, resume=resume, progress=progress, stop=stop
+            self.config, self.directory, self.comm, resume=resume, progress=self.progress, stop=self.stop
         )
         return summary, Coiled(model, coiling)
 
-    def pay_out(
-        self,
-        config: Config,
-        directory: Path,
-        comm,
-        coiled: Coiled | None,
-        stowed,
-        resume,
-        progress: bool,
-        stop,
-    ) -> dict:
+    def pay_out(self, coiled: Coiled | None, stowed, resume) -> dict:
         """:func:`~tapecoil.phases.hybrid_payout.run_hybrid_payout` from the hybrid's own coil."""
         if resume is None:  # a resumed payout's checkpoint holds its hybrid
-            coiled = self.start(config, comm, coiled, stowed, "payout")
+            coiled = self.start(coiled, stowed, "payout")
         return run_hybrid_payout(
-            config,
-            directory,
-            comm,
+            self.config,
+            self.directory,
+            self.comm,
             None if coiled is None else coiled.model,
             None if coiled is None else coiled.hybrid,
-            progress=progress,
-            stop=stop,
+            progress=self.progress,
+            stop=self.stop,
             resume=resume,
         )
 
-    def deploy(
-        self,
-        config: Config,
-        directory: Path,
-        comm,
-        coiled: Coiled | None,
-        stowed,
-        resume,
-        progress: bool,
-        stop,
-    ) -> dict:
+    def deploy(self, coiled: Coiled | None, stowed, resume) -> dict:
         """:func:`~tapecoil.phases.hybrid_deployment_run.run_hybrid_deployment` from the hybrid's
         own coil (a completed deployment's checkpoint needs none: its summary is read again)."""
         done = resume is not None and read_meta(resume).get("completed")
         if coiled is None or not done:
-            coiled = self.start(config, comm, coiled, stowed, "deployment")
+            coiled = self.start(coiled, stowed, "deployment")
         return run_hybrid_deployment(
-            config,
-            directory,
+            self.config,
+            self.directory,
             coiled.model,
             coiled.hybrid,
-            comm,
-            progress=progress,
-            stop=stop,
+            self.comm,
+            progress=self.progress,
+            stop=self.stop,
             resume=resume,
         )
 
-    @staticmethod
-    def start(config: Config, comm, coiled: Coiled | None, stowed, phase: str) -> Coiled:
+    def start(self, coiled: Coiled | None, stowed, phase: str) -> Coiled:
         """The full shell and the hybrid's own coil that the hybrid's ``phase`` (after the coiling)
         starts from: the run's own ``coiled``; a phase alone's from the hybrid coiling's
         ``stowed`` checkpoint; computed again where a resumed coiling's checkpoint does not hold
         the hybrid's state (another model's, or an older one's)."""
         if coiled is None:
-            return Coiled(*hybrid_coil_from(stowed, config, comm))
+            return Coiled(*hybrid_coil_from(stowed, self.config, self.comm))
         if coiled.hybrid is None:
             LOG.warning(
                 "the hybrid's %s starts from the hybrid's own coiled state, which the stowed "
                 "checkpoint does not hold: coiling with the hybrid again",
                 phase,
             )
-            return Coiled(coiled.model, coil_again(config, comm))
+            return Coiled(coiled.model, coil_again(self.config, self.comm))
         return coiled
 
 
 MODELS = {model.kind: model for model in (ShellModel, HybridModel)}
 
 
-def for_config(config: Config) -> ShellModel | HybridModel:
-    """The model ``config.model.kind`` names (the one place outside config/ that reads it; config
-    has checked it is one of :data:`MODELS`)."""
-    return MODELS[config.model.kind]()
+def for_config(config: Config, directory: Path, comm, progress: bool, stop) -> ShellModel | HybridModel:
+    """The model ``config.model.kind`` names, for one run into ``directory`` (the one place
+    outside config/ that reads the kind; config has checked it is one of :data:`MODELS`)."""
+    return MODELS[config.model.kind](config, directory, comm, progress, stop)
