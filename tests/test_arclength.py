@@ -9,7 +9,8 @@ import pytest
 from petsc4py import PETSc
 from scipy.optimize import minimize_scalar
 
-from tapecoil.core.arclength import ArcLength, ArcLengthError, ArcLengthSettings, PathSystem
+from tapecoil.core.arclength import ArcLength, ArcLengthError, ArcLengthSettings
+from tapecoil.core.path_system import PathSystem
 from tapecoil.core.stability import StabilityAnalysis
 
 # the von Mises truss: two bars of axial stiffness EA from the supports (+-a, 0) to the apex at

@@ -62,7 +62,8 @@ def test_short_curve_folds_at_the_fold_moment_through_its_snap(cfg):
 def test_primary_branch_on_two_ranks_as_on_one(cfg):
     """The primary branch to its first critical point on two ranks against one: the same
     points and the same snap rotation, to the Newton tolerance."""
-    from tapecoil.core.arclength import ArcLength, ArcLengthSettings, SolverSystem
+    from tapecoil.core.arclength import ArcLength, ArcLengthSettings
+    from tapecoil.core.path_system import SolverSystem
     from tapecoil.core.stability import StabilityAnalysis
     from tapecoil.verification.moment_rotation import BentTape, fold_resolution
 

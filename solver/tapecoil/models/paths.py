@@ -15,8 +15,9 @@ from __future__ import annotations
 import math
 
 from tapecoil.config import SolverConfig
-from tapecoil.core.arclength import ArcLength, ArcLengthSettings, SolverSystem
+from tapecoil.core.arclength import ArcLength, ArcLengthSettings
 from tapecoil.core.newton import SNESSolver
+from tapecoil.core.path_system import SolverSystem
 
 
 class _OwnedSolverSystem(SolverSystem):

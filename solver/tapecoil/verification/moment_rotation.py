@@ -44,9 +44,10 @@ from petsc4py import PETSc
 
 from tapecoil import theory
 from tapecoil.config import Config
-from tapecoil.core.arclength import ArcLength, ArcLengthError, ArcLengthSettings, SolverSystem
+from tapecoil.core.arclength import ArcLength, ArcLengthError, ArcLengthSettings
 from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.core.newton import SNESSolver
+from tapecoil.core.path_system import SolverSystem
 from tapecoil.core.stability import StabilityAnalysis
 from tapecoil.core.stepping import Continuation, Relaxation
 from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, create_strip_mesh
