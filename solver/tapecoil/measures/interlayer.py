@@ -15,8 +15,14 @@ hub carries the sum, F_0 = the integral of N over the whole wound angle (less wh
 attachment carries). Wound-roll mechanics (Altmann 1968, Hakiel 1987) state the same for a roll
 of frictionless layers; methods notes.
 
+Each turn is cut opposite the root (:data:`TURN_CUT`): where a turn passes over the step of
+the tape's start, its radius changes and its shear force is not zero, and a ring cut there
+leaves that shear in its equilibrium. Each pair is counted at the winding angle of its node and
+of its closest point on the partner cell: the interface is the lower of the two turns.
+
 The inner turns are those wound completely with a complete turn above them: the first turn
-is left out (the root's attachment holds it), and so is the outer one (the lift-off).
+is left out (the hub, the root's attachment and the step hold it), and so is the outer one (the
+lift-off).
 """
 
 from __future__ import annotations
@@ -36,31 +42,45 @@ if TYPE_CHECKING:
 # penalty spreads over the nodes: 5 % of a jump
 JUMP_TOLERANCE = 0.05
 
+# where each turn is cut: half a turn from the root's step [rad of winding angle]
+TURN_CUT = math.pi
+
 
 def interface_forces(
-    node_turn: np.ndarray, cell_turn: np.ndarray, force: np.ndarray, turns: int
+    psi_node: np.ndarray, psi_partner: np.ndarray, force: np.ndarray, turns: int, cut: float = TURN_CUT
 ) -> np.ndarray:
     """The normal force across each interface between turns (``turns`` + 1 of them: k between
-    turn k - 1 and turn k) from contact pairs: each pair's node on turn ``node_turn``, its
-    partner cell on turn ``cell_turn``, the force's magnitude ``force`` [N]; pairs between
-    turns that are not neighbours add nothing."""
+    turn k - 1 and turn k, turn k the winding angles [2 pi k + cut, 2 pi (k + 1) + cut)) from
+    contact pairs: each pair's node at the winding angle ``psi_node``, its closest point on the
+    partner at ``psi_partner``, the force's magnitude ``force`` [N]. A pair belongs to the
+    interface above the lower of its two points; pairs that are not a turn apart (a node on its
+    own turn's neighbour cell) add nothing."""
     out = np.zeros(turns + 1)
-    across = np.abs(node_turn - cell_turn) == 1
-    interface = np.maximum(node_turn, cell_turn)[across]
+    apart = np.abs(np.abs(psi_node - psi_partner) - 2 * math.pi) < math.pi
+    lower = np.minimum(psi_node, psi_partner)[apart]
+    interface = np.floor((lower - cut) / (2 * math.pi)).astype(np.int64) + 1
     inside = (interface >= 0) & (interface <= turns)
-    np.add.at(out, interface[inside], np.abs(force[across][inside]))
+    np.add.at(out, interface[inside], np.abs(force[apart][inside]))
     return out
 
 
-def turn_axial_force(psi: np.ndarray, axial_force: np.ndarray, turns: int) -> np.ndarray:
-    """The mean axial force [N] over each turn's winding angle, from N at points of winding
-    angle ``psi`` along the tape (sorted along it)."""
+def turn_axial_force(
+    psi: np.ndarray, axial_force: np.ndarray, turns: int, cut: float = TURN_CUT
+) -> np.ndarray:
+    """The mean axial force [N] over each turn's winding angles [2 pi k + cut, 2 pi (k + 1) +
+    cut), from N at points of winding angle ``psi`` along the tape (sorted along it)."""
     out = np.full(turns, math.nan)
     for k in range(turns):
-        pick = (psi >= 2 * math.pi * k) & (psi < 2 * math.pi * (k + 1))
+        start = 2 * math.pi * k + cut
+        pick = (psi >= start) & (psi < start + 2 * math.pi)
         if pick.sum() >= 2:
             out[k] = np.trapezoid(axial_force[pick], psi[pick]) / np.ptp(psi[pick])
     return out
+
+
+def complete_turns(angle: float, cut: float = TURN_CUT) -> int:
+    """How many turns [2 pi k + cut, 2 pi (k + 1) + cut) a coil wound to ``angle`` holds."""
+    return max(math.floor((angle - cut) / (2 * math.pi)), 0)
 
 
 def interlayer_measures(
@@ -115,23 +135,23 @@ def coil_interlayer(tape: TapeOnHub) -> dict | None:
     comm = tape.comm
     contact = tape.contact
     angle = tape.root.angle
-    turns = math.floor(angle / (2 * math.pi))
+    turns = complete_turns(angle)
     if turns < 3:
         return None
     surface = tape.turns.surface
     psi_nodes = surface.gather(contact.psi.x.array[: surface.n_owned].copy())
-    node_turn = np.floor(psi_nodes / (2 * math.pi)).astype(np.int64)
     pairs = tape.turns.pairs()
     cells = tape.turns.self_contact.cells
-    local = interface_forces(node_turn[pairs.node], node_turn[cells[pairs.cell, 8]], pairs.force, turns + 1)
+    psi_partner = np.einsum("pi,pi->p", pairs.N, psi_nodes[cells[pairs.cell]])
+    local = interface_forces(psi_nodes[pairs.node], psi_partner, pairs.force, turns + 1)
     forces = comm.allreduce(local, op=MPI.SUM)
     sections = tape.section_forces()
     line = tape.centre_line()
     psi_cut = np.interp(sections["xi1"], line["xi1"], line["psi"])
-    N = sections["axial_force"]
+    order = np.argsort(psi_cut)
+    psi_cut, N = psi_cut[order], sections["axial_force"][order]
     wound = psi_cut <= angle
-    order = np.argsort(psi_cut[wound])
-    wound_integral = float(np.trapezoid(N[wound][order], psi_cut[wound][order]))
+    wound_integral = float(np.trapezoid(N[wound], psi_cut[wound]))
     return interlayer_measures(
         forces, contact.radial_reaction(), turn_axial_force(psi_cut, N, turns), wound_integral
     )
