@@ -52,10 +52,10 @@ def coil_last_row():
     the last history row (for comparing a run on several ranks with one on each rank alone)."""
 
     def run(config, comm, angle):
-        from tapecoil.phases.coiling import CoilingModel
+        from tapecoil.phases.coiling import CoilingProblem
         from tapecoil.phases.coiling_run import CoilingRun
 
-        model = CoilingModel(config, comm)
+        model = CoilingProblem(config, comm)
         coiling = CoilingRun(model)
         coiling.flatten()
         coiling.coil(angle)

@@ -24,10 +24,10 @@ def short_tape(hub_angle=1.0, L=0.12) -> Config:
 @pytest.fixture(scope="module")
 def coiled_short():
     """A short tape flattened and coiled by 1 rad on one rank (shared by the tests below)."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
-    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    model = CoilingProblem(short_tape(), MPI.COMM_SELF)
     run = CoilingRun(model)
     run.flatten()
     run.coil(1.0)
@@ -36,9 +36,9 @@ def coiled_short():
 
 def test_hub_root_section_flattens_and_turns_onto_the_hub(cfg):
     from tapecoil.hub.attachment import HubRoot
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
 
-    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    model = CoilingProblem(short_tape(), MPI.COMM_SELF)
     root: HubRoot = model.root
     s = np.linspace(-cfg.tape.b / 2, cfg.tape.b / 2, 41)
     xi = np.vstack([np.zeros_like(s), s])
@@ -65,9 +65,9 @@ def test_hub_root_section_flattens_and_turns_onto_the_hub(cfg):
 
 
 def test_obstacle_staircase_climbs_one_thickness_per_turn():
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
 
-    model = CoilingModel(short_tape(hub_angle=20.0), MPI.COMM_SELF)
+    model = CoilingProblem(short_tape(hub_angle=20.0), MPI.COMM_SELF)
     c = model.contact
     w, h, r = c.ramp_width, c.h, c.r_hub
     psi = np.array(
@@ -78,9 +78,9 @@ def test_obstacle_staircase_climbs_one_thickness_per_turn():
 
 
 def test_winding_angle_is_unwrapped_from_step_to_step():
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
 
-    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    model = CoilingProblem(short_tape(), MPI.COMM_SELF)
     c = model.contact
     psi0 = c.psi.x.array.copy()
     # on the straight tape: 0 at the root (on top of the hub), rising along it towards pi/2
@@ -136,10 +136,10 @@ def test_turning_the_hub_back_pays_the_tape_out_reversibly(cfg):
     same angles (frictionless and quasi-static, the path is reversible; steady coiling
     rho (T + b w(rho)) within 10 % as for the coiling)."""
     from tapecoil import theory
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
-    model = CoilingModel(short_tape(hub_angle=2.0), MPI.COMM_SELF)
+    model = CoilingProblem(short_tape(hub_angle=2.0), MPI.COMM_SELF)
     run = CoilingRun(model)
     run.flatten()
     run.coil(2.0)
@@ -225,12 +225,12 @@ def test_a_tape_that_sinks_too_deep_stops_the_run_with_the_last_accepted_state()
     the hub as it wraps: steps that go deeper than contact.stop_penetration = 1 h are cut back,
     and the run stops, naming the key, where no shorter step stays within it; the state kept
     is the last accepted one, within the limit and close to it."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
     cfg = short_tape(hub_angle=2.5)
     cfg = dataclasses.replace(cfg, contact=dataclasses.replace(cfg.contact, penalty=1e7))
-    model = CoilingModel(cfg, MPI.COMM_SELF)
+    model = CoilingProblem(cfg, MPI.COMM_SELF)
     result = CoilingRun(model).run()
     h = cfg.tape.h
     assert not result.completed
@@ -292,10 +292,10 @@ def test_resume_from_checkpoint_matches_an_uninterrupted_run(tmp_path):
 
 def test_along_tape_shift_reproduces_nodes_and_smooth_fields():
     """A whole element's shift returns the nodal values; a smooth field moves to spline accuracy."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.predictors import AlongTape
 
-    model = CoilingModel(short_tape(), MPI.COMM_SELF)
+    model = CoilingProblem(short_tape(), MPI.COMM_SELF)
     nodes = model.contact.nodes
     along = AlongTape(nodes, MPI.COMM_SELF)
     assert len(along.lines) == 2 * model.strip.resolution.across + 1
@@ -334,14 +334,14 @@ def test_predictor_choice_follows_the_element_length():
 
 def test_shift_and_secant_predictors_reach_the_same_state():
     """The predictor changes the path of Newton, not the equilibrium (a short tape, 1.5 rad)."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
     states = {}
     for predictor in ("shift", "secant"):
         cfg = short_tape(hub_angle=1.5)
         cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, predictor=predictor))
-        model = CoilingModel(cfg, MPI.COMM_SELF)
+        model = CoilingProblem(cfg, MPI.COMM_SELF)
         assert model.predictor == predictor
         run = CoilingRun(model)
         run.flatten()
@@ -367,14 +367,14 @@ def test_equal_sense_coil_curves_with_its_section_and_flattens_on_the_hub(coiled
     Both read at the converged state, from the shell's own curvature fields and, for the turn's
     radius, from the nodes' positions about the hub axis.
     """
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
     cfg = short_tape(hub_angle=2 * math.pi)
     # the section's edges start inside the hub (the equal-sense section curves towards it)
     contact = dataclasses.replace(cfg.contact, stop_penetration=100.0)
     cfg = dataclasses.replace(cfg, coiling=dataclasses.replace(cfg.coiling, sense="equal"), contact=contact)
-    model = CoilingModel(cfg, MPI.COMM_SELF)
+    model = CoilingProblem(cfg, MPI.COMM_SELF)
     result = CoilingRun(model).run()
     assert result.completed, result.message
     tp, r_hub = cfg.tape, cfg.hub.radius
@@ -416,13 +416,13 @@ def test_surface_contact_keeps_the_second_turn_off_the_first():
     angle (the coarse mesh: 12 mm elements on a 12.7 mm hub), and the contact forces of the
     turns on each other sum to zero.
     """
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
     angle = 2 * math.pi + 1.2
     cfg = short_tape(hub_angle=angle)
     cfg = dataclasses.replace(cfg, contact=dataclasses.replace(cfg.contact, turns="surface"))
-    model = CoilingModel(cfg, MPI.COMM_SELF)
+    model = CoilingProblem(cfg, MPI.COMM_SELF)
     result = CoilingRun(model).run()
     assert result.completed, result.message
     line = model.tape.centre_line()
@@ -454,13 +454,13 @@ def test_hub_torque_from_the_reactions_matches_the_energy_balance(coiled_short):
 
 
 def test_a_body_turned_with_the_hub_adds_its_energy_and_follows_the_hub_angle():
-    """CoilingModel's ``obstacles``: a body with a penalty energy (here a spring pulling every
+    """CoilingProblem's ``obstacles``: a body with a penalty energy (here a spring pulling every
     point of the tape towards a height the body sets from the hub angle) is turned with the hub
     and its energy is the model's."""
     import dolfinx
 
     from tapecoil.core.dofs import global_scalar
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.tape_on_hub import TapeOnHub
 
     class Spring:
@@ -475,7 +475,7 @@ def test_a_body_turned_with_the_hub_adds_its_energy_and_follows_the_hub_angle():
 
     tape = TapeOnHub(short_tape(), MPI.COMM_SELF)
     spring = Spring(tape)
-    model = CoilingModel(short_tape(), MPI.COMM_SELF, tape=tape, obstacles=(spring,))
+    model = CoilingProblem(short_tape(), MPI.COMM_SELF, tape=tape, obstacles=(spring,))
     model.set_flattening(0.5)
     model.set_hub_angle(0.25)
     assert spring.angles == [0.0, 0.25]

@@ -22,10 +22,10 @@ def short_stowed_config(t_end=0.012, rho_inf=0.5) -> Config:
 
 
 def coil(config, comm):
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
-    model = CoilingModel(config, comm)
+    model = CoilingProblem(config, comm)
     run = CoilingRun(model)
     run.flatten()
     run.coil(config.coiling.hub_angle)
@@ -40,13 +40,13 @@ def deploy(coiling, config, quantity=None):
     ``quantity(model)``: a UFL integrand per unit reference area, integrated after every step
     (the release's row first); then the values come back too, one per history row."""
     from tapecoil.core.dofs import global_scalar
-    from tapecoil.phases.deployment import DeploymentModel
+    from tapecoil.phases.deployment import DeploymentProblem
     from tapecoil.phases.deployment_run import DeploymentRun
 
     saved = coiling.model.q.x.array.copy(), coiling.contact.psi.x.array.copy()
     angle = coiling.tape.root.angle  # a free hub turns the root
     try:
-        model = DeploymentModel(coiling.tape, config)
+        model = DeploymentProblem(coiling.tape, config)
         values, on_step = [], None
         if quantity is not None:
             import dolfinx
@@ -360,7 +360,7 @@ def test_deployment_from_a_checkpoint_builds_no_coiling_problem(stowed_short, tm
     def refuse(*_args, **_kwargs):
         raise AssertionError("the deployment built a coiling model")
 
-    monkeypatch.setattr(coiling.CoilingModel, "__init__", refuse)
+    monkeypatch.setattr(coiling.CoilingProblem, "__init__", refuse)
     config = short_stowed_config(t_end=0.0005)
     config = dataclasses.replace(config, output=dataclasses.replace(config.output, checkpoint=False))
     summary, model = run_deployment(

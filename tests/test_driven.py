@@ -25,11 +25,11 @@ def driven_coil(comm, dt=1e-3):
     """Flattened quasi-statically, then the hub turned by ANGLE at the tape speed SPEED, eased in
     and out (a smoothstep in time), then held still as long again."""
     from tapecoil.core.smoothing import smoothstep
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
     from tapecoil.phases.driven import DrivenMotion
 
-    model = CoilingModel(short_tape(), comm)
+    model = CoilingProblem(short_tape(), comm)
     CoilingRun(model).flatten()
     motion = DrivenMotion(model)
     rho = model.tape.r_hub + model.config.tape.h / 2
@@ -47,10 +47,10 @@ def test_a_slow_drive_follows_the_quasi_static_coiling():
     same angle, and rests there (measured: energy and slide to 1e-8, root force to 6e-7, kinetic
     energy 2e-16 of the strain energy, 192 steps): the inertia, the drive and the pull's dead load
     are those of the static problem in the limit."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
-    static = CoilingModel(short_tape(), MPI.COMM_SELF)
+    static = CoilingProblem(short_tape(), MPI.COMM_SELF)
     run = CoilingRun(static)
     run.flatten()
     run.coil(ANGLE)
@@ -65,11 +65,11 @@ def test_a_slow_drive_follows_the_quasi_static_coiling():
 
 
 def test_a_driven_motion_refuses_an_undamped_scheme():
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.driven import DrivenMotion
 
     with pytest.raises(ValueError, match="rho_inf"):
-        DrivenMotion(CoilingModel(short_tape(), MPI.COMM_SELF), rho_inf=1.0)
+        DrivenMotion(CoilingProblem(short_tape(), MPI.COMM_SELF), rho_inf=1.0)
 
 
 @pytest.mark.mpi

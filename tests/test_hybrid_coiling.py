@@ -125,14 +125,14 @@ def test_two_ranks_coil_the_hybrid_as_one():
     """The hybrid coiled on 2 ranks and on each alone past its first window move: the same
     windows, the same energy (1e-9) and lift-off (1e-9 of the length); carried into the full
     shell and settled there (a hybrid run's stowed state), the same energy (1e-9)."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.hybrid_coiling_run import settle
 
     assert MPI.COMM_WORLD.size > 1
     runs = []
     for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
         run = coiled(comm, 4.5)
-        shell = CoilingModel(coarse(4.5), comm)
+        shell = CoilingProblem(coarse(4.5), comm)
         run.carry_into(shell)
         settled = settle(shell, run.angle)["strain_energy_settled"]
         runs.append((run.strain_energy(), run.lift_off(), run.moves, settled))

@@ -618,7 +618,7 @@ def test_a_stopped_hybrid_deployment_goes_on_from_its_checkpoint_as_if_never_sto
     from test_hybrid_coiling import StopAfter
 
     from tapecoil.core.checkpoint import read_meta, read_tables
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.hybrid_deployment_run import run_hybrid_deployment
 
     config = coarse(4.5)
@@ -631,7 +631,7 @@ def test_a_stopped_hybrid_deployment_goes_on_from_its_checkpoint_as_if_never_sto
     )
     comm = MPI.COMM_WORLD
     coil = coiled(comm, 4.5)
-    model = CoilingModel(config, comm)  # the full shell the files are written through
+    model = CoilingProblem(config, comm)  # the full shell the files are written through
     coil.carry_into(model)
     direct = run_hybrid_deployment(config, tmp_path / "direct", model, coil, comm, progress=False)
     early = tmp_path / "early"

@@ -23,10 +23,10 @@ def short_tape(hub_angle=3.0, L=0.12, lambda_end=0.9) -> Config:
 
 
 def _flattened(comm):
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
-    model = CoilingModel(short_tape(), comm)
+    model = CoilingProblem(short_tape(), comm)
     CoilingRun(model).flatten()
     return model
 
@@ -146,13 +146,13 @@ def test_payout_that_deploys_nothing_is_refused_before_computing():
 def test_payout_keys_act():
     """payout.tension sets the pull held while paying out, payout.max_step the largest step; left
     at 0 they take the coiling's."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
     from tapecoil.phases.payout import PayoutPhase
 
     cfg = short_tape(hub_angle=0.3, lambda_end=0.99)
     cfg = dataclasses.replace(cfg, payout=dataclasses.replace(cfg.payout, tension=1.5, max_step=0.05))
-    model = CoilingModel(cfg, MPI.COMM_SELF)
+    model = CoilingProblem(cfg, MPI.COMM_SELF)
     run = CoilingRun(model)
     run.flatten()
     run.coil(0.3)
@@ -167,12 +167,12 @@ def test_payout_keys_act():
 @pytest.mark.mpi
 def test_two_ranks_pay_out_as_one():
     """The same short payout distributed over the ranks and on each rank alone."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
     from tapecoil.phases.payout import PayoutPhase
 
     def pay_out(comm):
-        model = CoilingModel(short_tape(hub_angle=1.0, lambda_end=0.96), comm)
+        model = CoilingProblem(short_tape(hub_angle=1.0, lambda_end=0.96), comm)
         run = CoilingRun(model)
         run.flatten()
         run.coil(1.0)

@@ -84,7 +84,7 @@ def coiled():
     """A 0.1 m tape coiled by 0.3 rad with every [solver] key away from its default; the step
     controls the coiling and the deployment built are recorded."""
     from tapecoil.phases import deployment, deployment_run
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
     cfg = Config()
@@ -102,7 +102,7 @@ def coiled():
             controls.append(("coiling", control))
             return super().continuation(set_load, control, predict)
 
-    model = CoilingModel(cfg, MPI.COMM_WORLD)
+    model = CoilingProblem(cfg, MPI.COMM_WORLD)
     run = Recorded(model)
     run.flatten()
     run.coil(cfg.coiling.hub_angle)
@@ -116,7 +116,7 @@ def coiled():
 
     deployment_run.Continuation = RecordedContinuation
     try:
-        deploy = deployment.DeploymentModel(model.tape, cfg)
+        deploy = deployment.DeploymentProblem(model.tape, cfg)
         result = deployment_run.DeploymentRun(deploy).run()
     finally:
         deployment_run.Continuation = original
@@ -154,13 +154,13 @@ def test_the_deployment_takes_every_setting(coiled):
 
 
 def test_phase_tables_override_the_solver_table():
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
 
     cfg = Config()
     cfg.tape.L = 0.1
     cfg.mesh.preset = "coarse"
     cfg.solver.petsc_options = {"snes_max_it": 9, "ksp_type": "gmres"}
     cfg.coiling.petsc_options = {"snes_max_it": 4}
-    snes = CoilingModel(cfg, MPI.COMM_WORLD).solver.snes
+    snes = CoilingProblem(cfg, MPI.COMM_WORLD).solver.snes
     assert snes.getTolerances()[3] == 4  # the phase's table over [solver]'s
     assert snes.getKSP().getType() == "gmres"  # [solver]'s where the phase's says nothing

@@ -42,11 +42,11 @@ def test_coiling_rows_and_summary_carry_the_stability(tmp_path):
     eigenvalues; the last row's are those of the whole spectrum of the same stiffness (dense,
     numpy) to 1e-6 (SLEPc's shift-and-invert converges to its default tolerance 1e-8); the
     summary holds the stowed coil's, hub held and free, and the judging's cost."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingPhase
     from tapecoil.phases.step_stability import COLUMNS
 
-    model = CoilingModel(short_coil_with_stability(), MPI.COMM_SELF)
+    model = CoilingProblem(short_coil_with_stability(), MPI.COMM_SELF)
     phase = CoilingPhase(model)
     t0 = time.perf_counter()
     phase.run.flatten()
@@ -71,11 +71,11 @@ def test_coiling_rows_and_summary_carry_the_stability(tmp_path):
 def test_a_payouts_rows_carry_the_stability():
     """A payout turns the hub back through the coiling's rows: the hub of the short coil turned
     back by half a radian, each of its rows judged, the last against the dense spectrum."""
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
     from tapecoil.phases.step_stability import COLUMNS
 
-    model = CoilingModel(short_coil_with_stability(), MPI.COMM_SELF)
+    model = CoilingProblem(short_coil_with_stability(), MPI.COMM_SELF)
     run = CoilingRun(model)
     run.flatten()
     run.coil(1.0)

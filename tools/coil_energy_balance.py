@@ -25,7 +25,7 @@ from tapecoil import theory
 from tapecoil.app.sweep import load_sweep
 from tapecoil.config import config_from_dict, load_config
 from tapecoil.measures.coil_section import CoilSection
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingProblem
 from tapecoil.phases.coiling_run import CoilingRun
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -59,7 +59,7 @@ for ratio in (args.ratio - args.delta, args.ratio, args.ratio + args.delta):
         contact=dataclasses.replace(base.contact, smoothing=0.0),
         mesh=dataclasses.replace(base.mesh, element_size=args.element_size or base.mesh.element_size),
     )
-    model = CoilingModel(case, comm)
+    model = CoilingProblem(case, comm)
     run = CoilingRun(model, max_step=0.05)
     run.flatten()
     run.coil(args.angle)

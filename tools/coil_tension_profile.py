@@ -19,7 +19,7 @@ from mpi4py import MPI
 from tapecoil import theory
 from tapecoil.config import CoilingConfig, Config, ContactConfig, TapeConfig
 from tapecoil.measures.section_forces import SectionForces
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingProblem
 from tapecoil.phases.coiling_run import CoilingRun
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -48,7 +48,7 @@ config = dataclasses.replace(
     mesh=dataclasses.replace(base.mesh, preset="default", elements_across=args.across),
 )
 comm = MPI.COMM_WORLD
-model = CoilingModel(config, comm)
+model = CoilingProblem(config, comm)
 run = CoilingRun(model)
 sections = SectionForces(model.model, model.tape.contact.nodes, comm)
 stations = (1.0, 1.5)

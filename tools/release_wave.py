@@ -20,8 +20,8 @@ import numpy as np
 from mpi4py import MPI
 
 from tapecoil.config import load_config
-from tapecoil.phases.coiling import CoilingModel
-from tapecoil.phases.deployment import DeploymentModel
+from tapecoil.phases.coiling import CoilingProblem
+from tapecoil.phases.deployment import DeploymentProblem
 from tapecoil.phases.deployment_run import DeploymentRun
 from tapecoil.phases.hybrid_coiling import HybridCoiling
 from tapecoil.phases.hybrid_coiling_run import settle
@@ -118,12 +118,12 @@ if comm.rank == 0:
         f"{behind[1]:.3f} m, t = {1e3 * behind[2]:.2f} ms"
     )
 
-model = CoilingModel(config, comm)
+model = CoilingProblem(config, comm)
 coiling.carry_into(model)
 settle(model, coiling.angle)
 follow(*sides["full shell"], 0.0, model.tape)
 DeploymentRun(
-    DeploymentModel(model.tape, config),
+    DeploymentProblem(model.tape, config),
     on_step=lambda row: follow(*sides["full shell"], row["time"], model.tape),
 ).run()
 

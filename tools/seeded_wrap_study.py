@@ -263,7 +263,7 @@ def main(argv: list[str]) -> None:
     from mpi4py import MPI
 
     from tapecoil.config import config_from_dict
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.tape_on_hub import TapeOnHub
     from tapecoil.phases.wrapping import WrapStudy, wrap_case
 
@@ -294,7 +294,7 @@ def main(argv: list[str]) -> None:
     tape = TapeOnHub(case, comm)
     angles = tuple(wrap * k / (seeds + 1) for k in range(1, seeds + 1))
     bodies = FoldSeeds(tape.model, tape.frame, tape.penalty, angles, R, standoff * R, tape.contact.smoothing)
-    model = CoilingModel(case, comm, tape=tape, obstacles=(bodies,))
+    model = CoilingProblem(case, comm, tape=tape, obstacles=(bodies,))
     if comm.rank == 0:
         print(
             f"r_c/R = {ratio}, {seeds} seeds at {[round(math.degrees(a)) for a in angles]} deg standing "

@@ -19,7 +19,7 @@ from mpi4py import MPI
 
 from tapecoil.config import Config
 from tapecoil.core import compat
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingProblem
 
 parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 parser.add_argument("mesh", nargs="?", default="default", choices=("coarse", "default", "fine"))
@@ -34,7 +34,7 @@ config = dataclasses.replace(
     coiling=dataclasses.replace(config.coiling, hub_angle=angle),
     mesh=dataclasses.replace(config.mesh, preset=args.mesh),
 )
-model = CoilingModel(config)
+model = CoilingProblem(config)
 shell, solver = model.model, model.solver
 REPEAT = 20
 

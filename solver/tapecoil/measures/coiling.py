@@ -283,7 +283,7 @@ def hub_torque_measure(history: list[dict]) -> dict | None:
     """The hub torque read from the root's reactions against the energy balance of the steps.
 
     Two independent readings of one torque: the virtual work of the root's reactions in a turn
-    of the hub (:meth:`CoilingModel.hub_torque`, at each converged state) and the change of
+    of the hub (:meth:`CoilingProblem.hub_torque`, at each converged state) and the change of
     stored energy plus the work against the pull over each step (the history's hub_torque, a
     secant). Compared as the work each does over the run (the reaction torque integrated by
     the trapezoidal rule over the steps on which the energy balance is defined). None before

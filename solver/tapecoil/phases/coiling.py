@@ -99,7 +99,7 @@ def check_free_end_room(config: Config) -> None:
     )
 
 
-class CoilingModel:
+class CoilingProblem:
     """A coiling run's loads and solver on a :class:`TapeOnHub`: the guide, the pull, the
     relaxation, the SNES and the predictor.
 
@@ -251,7 +251,7 @@ class CoilingModel:
 
 
 # -- checkpoint -------------------------------------------------------------------------------
-def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict, tables: dict | None = None) -> None:
+def write_checkpoint(model: CoilingProblem, path: str | Path, meta: dict, tables: dict | None = None) -> None:
     """The state a restart or the deployment needs (:meth:`TapeOnHub.write_checkpoint`), with,
     for the secant predictor, the previous converged state; ``meta`` holds the hub angle, the
     tension and the stepping's restart state; ``tables``: another model's state beside it (the
@@ -265,10 +265,10 @@ def write_checkpoint(model: CoilingModel, path: str | Path, meta: dict, tables: 
     model.tape.write_checkpoint(path, meta, extra, tables)
 
 
-def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[CoilingModel, dict]:
-    """A :class:`CoilingModel` in the state of a checkpoint (any phase's, any rank count)."""
+def read_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD) -> tuple[CoilingProblem, dict]:
+    """A :class:`CoilingProblem` in the state of a checkpoint (any phase's, any rank count)."""
     tape, meta = TapeOnHub.read_checkpoint(path, config, comm)
-    model = CoilingModel(config, comm, tape=tape)
+    model = CoilingProblem(config, comm, tape=tape)
     previous_angle = meta.get("run", {}).get("previous_angle")
     if previous_angle is not None:
         previous = checkpoint.empty_state_parts(model.model.W, "previous_")

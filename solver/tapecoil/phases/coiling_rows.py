@@ -15,7 +15,7 @@ from tapecoil.phases.step_stability import StepStability
 
 
 class CoilingRows:
-    """The rows of a :class:`~tapecoil.phases.coiling.CoilingModel`'s history.
+    """The rows of a :class:`~tapecoil.phases.coiling.CoilingProblem`'s history.
 
     The hub torque of the energy balance needs the potential of the step before
     (``last_potential``, part of a restart state).

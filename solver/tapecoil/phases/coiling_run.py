@@ -1,6 +1,6 @@
 """The coiling run: flatten, then turn the hub in adaptive steps, a history row per step.
 
-:class:`CoilingRun` steps the loads of a :class:`~tapecoil.phases.coiling.CoilingModel`
+:class:`CoilingRun` steps the loads of a :class:`~tapecoil.phases.coiling.CoilingProblem`
 (flattening, then hub rotation with cut-back and relaxation through snaps) and records what each
 converged step measured (:mod:`tapecoil.phases.coiling_rows`); :class:`CoilingPhase` is the run
 as a phase of the one runner (:mod:`tapecoil.phases.runner`), and :func:`run_coiling` runs it
@@ -23,7 +23,7 @@ from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import Continuation, ContinuationError, Relaxation
 from tapecoil.measures.coiling import coil_measures, coiled_cells, hub_torque_measure, ploy_measure
 from tapecoil.models.solver_terms import relaxation_scale
-from tapecoil.phases.coiling import CoilingModel, check_free_end_room, read_checkpoint, write_checkpoint
+from tapecoil.phases.coiling import CoilingProblem, check_free_end_room, read_checkpoint, write_checkpoint
 from tapecoil.phases.coiling_rows import CoilingRows
 from tapecoil.phases.model_tag import by_hybrid
 from tapecoil.phases.runner import LOG, Phase, run_phase
@@ -53,7 +53,7 @@ class CoilingRun(SteppedRun):
     # take; the secant needs short ones (the benchmark's counts: docs/notes/coiling.md)
     max_steps: ClassVar[dict[str, float]] = {"shift": 1.0, "secant": 0.3}
 
-    def __init__(self, model: CoilingModel, on_step=None, max_step: float | None = None, stop=None):
+    def __init__(self, model: CoilingProblem, on_step=None, max_step: float | None = None, stop=None):
         super().__init__(CoilingResult(), on_step, stop)
         self.m = model
         self.max_step = max_step or model.config.coiling.max_step or self.max_steps[model.predictor]
@@ -153,13 +153,13 @@ class CoilingRun(SteppedRun):
 
 
 class HubTurningPhase(Phase):
-    """A phase that turns the hub of a :class:`CoilingModel` (the coiling, a driven hub's payout):
+    """A phase that turns the hub of a :class:`CoilingProblem` (the coiling, a driven hub's payout):
     it is where the hub is, its checkpoint is the coiling model's, and its run figures are the
     same."""
 
     unit = "rad"
 
-    def __init__(self, model: CoilingModel):
+    def __init__(self, model: CoilingProblem):
         super().__init__()
         self.model = model
 
@@ -217,7 +217,7 @@ class CoilingPhase(HubTurningPhase):
 
     name, checkpoint_name = "coiling", "stowed"
 
-    def __init__(self, model: CoilingModel, restart: dict | None = None, stop=None):
+    def __init__(self, model: CoilingProblem, restart: dict | None = None, stop=None):
         super().__init__(model)
         self.target = model.config.coiling.hub_angle
         self.run = CoilingRun(model, stop=stop)
@@ -273,7 +273,7 @@ class CoilingPhase(HubTurningPhase):
         return summary
 
 
-def write_coiled_cells(model: CoilingModel, directory: Path) -> dict:
+def write_coiled_cells(model: CoilingProblem, directory: Path) -> dict:
     """coiled_cells.csv in ``directory``: the state at the cell midpoints (for the pictures);
     returns them (collective)."""
     cells = coiled_cells(model.tape)
@@ -295,7 +295,7 @@ def run_coiling(
     resume: str | Path | None = None,
     progress: bool = True,
     stop=None,
-) -> tuple[dict, CoilingModel]:
+) -> tuple[dict, CoilingProblem]:
     """Coil to the stowed state, writing into ``directory``; returns the phase summary and model.
 
     ``directory`` receives coiling_history.csv (a row per converged step), coiling.bp and
@@ -319,7 +319,7 @@ def run_coiling(
         if by_hybrid(restart):
             raise ValueError(f"{resume} is the hybrid model's coiling: resume it with model.kind = 'hybrid'")
     else:
-        model = CoilingModel(config, comm)
+        model = CoilingProblem(config, comm)
     phase = CoilingPhase(model, restart, stop)
     res = model.strip.resolution
     if restart is not None:

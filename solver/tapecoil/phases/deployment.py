@@ -41,7 +41,7 @@ from tapecoil.phases.root_loads import RootLoads
 from tapecoil.phases.tape_on_hub import TapeOnHub
 
 
-class DeploymentModel:
+class DeploymentProblem:
     """The released tape: root attached to the hub, contact kept, inertia added.
 
     The hub is held at its stowed angle (``deployment.hub = "fixed"``) or turns on its axis with
@@ -279,7 +279,7 @@ class DeploymentModel:
         return self.tape.contact_energy() - before
 
 
-def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: dict) -> None:
+def write_deployment_checkpoint(model: DeploymentProblem, path: str | Path, meta: dict) -> None:
     """The deployment's restart state: the shell state and winding angles (as a coiling
     checkpoint, so that ``tapecoil deploy`` can start from it too), velocity, acceleration, the
     stowed state the release refers to and, for the conserving scheme, the director velocity."""
@@ -295,8 +295,8 @@ def write_deployment_checkpoint(model: DeploymentModel, path: str | Path, meta: 
 
 
 def read_deployment_checkpoint(path: str | Path, config: Config, comm=MPI.COMM_WORLD):
-    """A :class:`DeploymentModel` in the state of :func:`write_deployment_checkpoint`, and the meta."""
+    """A :class:`DeploymentProblem` in the state of :func:`write_deployment_checkpoint`, and the meta."""
     tape, meta = TapeOnHub.read_checkpoint(path, config, comm)
-    model = DeploymentModel(tape, config)
+    model = DeploymentProblem(tape, config)
     model.restore(path)
     return model, meta

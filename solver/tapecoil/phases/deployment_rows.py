@@ -19,7 +19,7 @@ from tapecoil.core.stepping import StepRecord
 
 
 class DeploymentRows:
-    """The rows of a :class:`~tapecoil.phases.deployment.DeploymentModel`'s history.
+    """The rows of a :class:`~tapecoil.phases.deployment.DeploymentProblem`'s history.
 
     ``stowed_energy`` is the potential (strain and contact) of the first row, ``external_work``
     the work of the loads so far (the releasing hold, gravity); both go into a restart state
@@ -55,7 +55,7 @@ class DeploymentRows:
         self.residual_work += self.m.residual_work()
 
     def add_update_energy(self, change: float) -> None:
-        """The contact energy's change by the update after a step (:meth:`DeploymentModel.update`)."""
+        """The contact energy's change by the update after a step (:meth:`DeploymentProblem.update`)."""
         self.update_energy += change
 
     def row(self, t: float, step: StepRecord | None) -> dict:

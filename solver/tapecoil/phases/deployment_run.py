@@ -1,6 +1,6 @@
 """The deployment run: time steps from release to the deployed state, a history row per step.
 
-:class:`DeploymentRun` steps a :class:`~tapecoil.phases.deployment.DeploymentModel` in time
+:class:`DeploymentRun` steps a :class:`~tapecoil.phases.deployment.DeploymentProblem` in time
 (generalized-alpha, adaptive steps with cut-back) and records what each step measured
 (:mod:`tapecoil.phases.deployment_rows`); :class:`DeploymentPhase` is the run as a phase of the
 one runner (:mod:`tapecoil.phases.runner`), and :func:`run_deployment` runs it into a results
@@ -20,7 +20,7 @@ from tapecoil.core.dofs import global_size
 from tapecoil.core.stepping import Continuation, ContinuationError
 from tapecoil.measures.deployment import deployment_measures, root_load_peaks
 from tapecoil.phases.deployment import (
-    DeploymentModel,
+    DeploymentProblem,
     read_deployment_checkpoint,
     write_deployment_checkpoint,
 )
@@ -46,7 +46,7 @@ class DeploymentRun(SteppedRun):
     """Time stepping from release to ``deployment.lambda_end`` (or ``deployment.t_end``).
 
     Steps start at ``deployment.dt`` and, with ``deployment.error_tolerance`` set, are sized
-    by their estimated local error (:meth:`DeploymentModel.step_error`); they grow by at most
+    by their estimated local error (:meth:`DeploymentProblem.step_error`); they grow by at most
     ``solver.grow`` and only after easy solves, up to ``max_dt``; a step that fails is cut
     back (``solver.cutback``, ``solver.max_cutbacks``), as in the load stepping.
     ``on_step(row)`` is called on every rank after each step with its row
@@ -55,7 +55,7 @@ class DeploymentRun(SteppedRun):
 
     easy_iterations = EASY_ITERATIONS
 
-    def __init__(self, model: DeploymentModel, on_step=None, max_dt: float | None = None, stop=None):
+    def __init__(self, model: DeploymentProblem, on_step=None, max_dt: float | None = None, stop=None):
         super().__init__(DeploymentResult(), on_step, stop)
         self.m = model
         d = model.config.deployment
@@ -163,7 +163,7 @@ class DeploymentPhase(Phase):
 
     name, checkpoint_name, unit = "deployment", "deployed", "s"
 
-    def __init__(self, model: DeploymentModel, restart: dict | None = None, stop=None):
+    def __init__(self, model: DeploymentProblem, restart: dict | None = None, stop=None):
         super().__init__()
         self.model = model
         self.target = model.config.deployment.t_end
@@ -276,7 +276,7 @@ def run_deployment(
     progress: bool = True,
     stop=None,
     resume: str | Path | None = None,
-) -> tuple[dict, DeploymentModel]:
+) -> tuple[dict, DeploymentProblem]:
     """Deploy from the stowed state, writing into ``directory``; returns the phase summary and model.
 
     The start is the stowed checkpoint directory ``stowed``, the in-memory ``tape`` (a coiling
@@ -296,7 +296,7 @@ def run_deployment(
             if stowed is None:
                 raise ValueError("deployment needs a stowed checkpoint directory or a stowed tape")
             tape, _ = TapeOnHub.read_checkpoint(stowed, config, comm)
-        model = DeploymentModel(tape, config)
+        model = DeploymentProblem(tape, config)
     d = config.deployment
     phase = DeploymentPhase(model, restart, stop)
     if restart is not None:

@@ -23,12 +23,12 @@ from tapecoil.core.dofs import global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
 from tapecoil.core.timeint import GeneralizedAlpha
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingProblem
 from tapecoil.phases.deployment_forms import DeploymentForms
 
 
 class DrivenMotion:
-    """The tape of a :class:`CoilingModel` moving in time under its loads and the caller's drive.
+    """The tape of a :class:`CoilingProblem` moving in time under its loads and the caller's drive.
 
     ``bcs``: boundary conditions besides the model's (the root and the guide), e.g. an end held
     by its displacement (:class:`~tapecoil.phases.wrapping.EndDisplacement`). ``rho_inf``: the
@@ -36,7 +36,7 @@ class DrivenMotion:
     model's current state.
     """
 
-    def __init__(self, model: CoilingModel, bcs: tuple = (), rho_inf: float = 0.3, prefix: str = "driven_"):
+    def __init__(self, model: CoilingProblem, bcs: tuple = (), rho_inf: float = 0.3, prefix: str = "driven_"):
         if not 0.0 <= rho_inf < 1.0:
             raise ValueError(f"rho_inf = {rho_inf!r}: a driven motion damps its snaps, 0 <= rho_inf < 1")
         self.model = model

@@ -129,7 +129,7 @@ class HubNewton:
 
 
 class FreeHubCoupling(HubNewton):
-    """The hub's and the tape's equations of a :class:`~tapecoil.phases.deployment.DeploymentModel`
+    """The hub's and the tape's equations of a :class:`~tapecoil.phases.deployment.DeploymentProblem`
     solved together (see the module docstring); ``jacobian`` is the UFL Jacobian of the tape's
     solver."""
 

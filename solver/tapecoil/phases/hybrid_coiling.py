@@ -312,7 +312,7 @@ class HybridCoiling:
     def root_tension(self) -> float:
         """The axial force N [N] the tape carries into its root on the hub (tension positive): the
         beam's internal force at its clamped root along the tape's direction there, turned with
-        the hub (as the full shell's :meth:`CoilingModel.edge_forces`), or the window's when it
+        the hub (as the full shell's :meth:`CoilingProblem.edge_forces`), or the window's when it
         holds the root (collective). T - N is the coiling tension of the first turn."""
         h = self.hybrid
         if h.shell.root is not None:
@@ -359,7 +359,7 @@ class HybridCoiling:
         """The torque [N m] the hub applies to the tape through the root's attachment, positive in
         the coiling sense: the reaction of the beam's clamped root node, or of the window's root
         edge when it holds the root, at the converged state (as the full shell's
-        :meth:`~tapecoil.phases.coiling.CoilingModel.hub_torque`; collective)."""
+        :meth:`~tapecoil.phases.coiling.CoilingProblem.hub_torque`; collective)."""
         if self._root_loads is None or self._root_loads[0] is not self.hybrid:
             self._root_loads = (self.hybrid, HybridRootLoads.at_rest(self.hybrid, self.frame))
         return -self._root_loads[1]()["root_torque"]
@@ -494,7 +494,7 @@ class HybridCoiling:
         self._t0 = clock_origin(last_wall_time(self.records))
 
     def carry_into(self, model, hybrid: HybridProblem | None = None, angle: float | None = None) -> None:
-        """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingModel` of
+        """Set the full shell of ``model`` (a :class:`~tapecoil.phases.coiling.CoilingProblem` of
         the same configuration) to this hybrid's state (or ``hybrid``'s: one of this tape at this
         hub angle, or at the hub angle ``angle`` [rad], a deploying one): the hub angle and the
         pull, the shell's state where the window is and the beams' sections placed elsewhere

@@ -2,7 +2,7 @@
 
 :class:`HybridCoilingPhase` coils with :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`
 (a shell window that follows the lift-off, beams before and after it) and keeps a full shell
-of the same tape (a :class:`~tapecoil.phases.coiling.CoilingModel`) in the hybrid's
+of the same tape (a :class:`~tapecoil.phases.coiling.CoilingProblem`) in the hybrid's
 configuration: after every converged step the hybrid's state is carried into it
 (:meth:`HybridCoiling.carry_into`), so that the snapshots, the ParaView series and the
 geometric measures of a step (the deployed fraction, the penetration) are the whole tape's, as
@@ -44,7 +44,7 @@ from tapecoil.measures.payout import (
     tension_law_with_edges,
 )
 from tapecoil.models.nodes import Nodes
-from tapecoil.phases.coiling import CoilingModel, write_checkpoint
+from tapecoil.phases.coiling import CoilingProblem, write_checkpoint
 from tapecoil.phases.coiling_run import HubTurningPhase, write_coiled_cells
 from tapecoil.phases.hybrid_coiling import HybridCoiling, WindowSettings
 from tapecoil.phases.model_tag import HYBRID, KEY, by_hybrid
@@ -66,13 +66,13 @@ class HybridCoilingPhase(HubTurningPhase):
         self,
         config: Config,
         comm=MPI.COMM_WORLD,
-        model: CoilingModel | None = None,
+        model: CoilingProblem | None = None,
         restart=None,
         stop=None,
         coiling: HybridCoiling | None = None,
         completed: bool = False,
     ):
-        super().__init__(model or CoilingModel(config, comm))
+        super().__init__(model or CoilingProblem(config, comm))
         self.config, self.comm, self.stop = config, comm, stop
         self.target = config.coiling.hub_angle
         self.settling: dict = dict(restart["settling"]) if restart else {}
@@ -227,7 +227,7 @@ class HybridCoilingPhase(HubTurningPhase):
         return self.coiling_summary(interrupted, t_start, measures)
 
 
-def settle(model: CoilingModel, angle: float) -> dict:
+def settle(model: CoilingProblem, angle: float) -> dict:
     """Solve the full shell of ``model``, put in a hybrid's configuration at the hub angle
     ``angle`` [rad], once there: its equilibrium. Returns the solve's Newton iterations and
     wall time [s], the strain energy [J] before and after, and the largest displacement [m]
@@ -270,10 +270,10 @@ def run_hybrid_coiling(
     resume: str | Path | None = None,
     progress: bool = True,
     stop=None,
-) -> tuple[dict, CoilingModel, HybridCoiling | None]:
+) -> tuple[dict, CoilingProblem, HybridCoiling | None]:
     """Coil with the hybrid into ``directory`` (the files of
     :func:`~tapecoil.phases.coiling_run.run_coiling`); returns the phase summary, the full
-    shell's settled :class:`CoilingModel` and the coiled :class:`HybridCoiling` (the hybrid's own
+    shell's settled :class:`CoilingProblem` and the coiled :class:`HybridCoiling` (the hybrid's own
     state, which its deployment starts from; None when a completed coiling's checkpoint does not
     hold it). ``resume``: a checkpoint of a hybrid coiling to go on from as if never stopped (a
     completed one's summary again, nothing computed); one without the hybrid's state (another

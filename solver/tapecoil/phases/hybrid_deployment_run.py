@@ -41,7 +41,7 @@ __all__ = ["HybridDeploymentPhase", "run_hybrid_deployment"]
 class HybridDeploymentPhase(Phase):
     """The deployment of ``coiling``'s tape (a coiled
     :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`) by the hybrid, written through
-    ``model``'s full shell (a :class:`~tapecoil.phases.coiling.CoilingModel` of the same
+    ``model``'s full shell (a :class:`~tapecoil.phases.coiling.CoilingProblem` of the same
     configuration: the settled stowed state). ``restart``: a checkpoint's restart state, with
     ``deployment`` restored from it to go on with, or ``completed`` (its summary, nothing
     computed). ``stop``: as the full shell's deployment."""
@@ -230,7 +230,7 @@ def run_hybrid_deployment(
 ) -> dict:
     """Deploy ``coiling``'s tape (a coiled :class:`~tapecoil.phases.hybrid_coiling.HybridCoiling`)
     with the hybrid into ``directory``, its files written through ``model``'s full shell (the
-    settled stowed :class:`~tapecoil.phases.coiling.CoilingModel`); returns the phase summary.
+    settled stowed :class:`~tapecoil.phases.coiling.CoilingProblem`); returns the phase summary.
     ``resume``: a deployment checkpoint to go on from as if never stopped (``coiling`` is the
     coil it deploys); a completed hybrid one gives its summary again; one without the hybrid's
     state deploys again from the release (``coiling`` is needed in both)."""

@@ -26,7 +26,7 @@ from mpi4py import MPI
 
 from tapecoil.config import Config
 from tapecoil.core.checkpoint import read_meta, read_tables
-from tapecoil.phases.coiling import CoilingModel, read_checkpoint
+from tapecoil.phases.coiling import CoilingProblem, read_checkpoint
 from tapecoil.phases.hybrid_coiling import HybridCoiling
 from tapecoil.phases.hybrid_coiling_run import HybridCoilingPhase
 from tapecoil.phases.model_tag import by_hybrid
@@ -46,7 +46,7 @@ class HybridPayoutPhase(PayoutReport, HybridCoilingPhase):
         self,
         config: Config,
         comm,
-        model: CoilingModel,
+        model: CoilingProblem,
         coiling: HybridCoiling,
         stop=None,
         restart: dict | None = None,
@@ -77,7 +77,7 @@ class HybridPayoutPhase(PayoutReport, HybridCoilingPhase):
 
 def hybrid_coil_from(
     stowed: str | Path, config: Config, comm=MPI.COMM_WORLD
-) -> tuple[CoilingModel, HybridCoiling]:
+) -> tuple[CoilingProblem, HybridCoiling]:
     """The full shell and the hybrid's own coil of the stowed checkpoint of a completed coiling by
     the hybrid (``tapecoil coil --model hybrid``: its tables hold the hybrid's state), which the
     hybrid's payout and deployment alone start from; refused, before anything is computed, for
@@ -102,7 +102,7 @@ def run_hybrid_payout(
     config: Config,
     directory: str | Path,
     comm=MPI.COMM_WORLD,
-    model: CoilingModel | None = None,
+    model: CoilingProblem | None = None,
     coiling: HybridCoiling | None = None,
     progress: bool = True,
     stop=None,

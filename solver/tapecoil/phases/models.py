@@ -15,7 +15,7 @@ from pathlib import Path
 
 from tapecoil.config import Config
 from tapecoil.core.checkpoint import read_meta
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingProblem
 from tapecoil.phases.coiling_run import run_coiling
 from tapecoil.phases.deployment_run import run_deployment
 from tapecoil.phases.hybrid_coiling import HybridCoiling
@@ -29,10 +29,10 @@ from tapecoil.phases.runner import LOG
 @dataclass
 class Coiled:
     """A coiling's result that the run's later phases start from: the full shell's
-    :class:`CoilingModel` and, for the hybrid, its own coiled state (None where a resumed
+    :class:`CoilingProblem` and, for the hybrid, its own coiled state (None where a resumed
     coiling's checkpoint does not hold it, and always for the full shell)."""
 
-    model: CoilingModel
+    model: CoilingProblem
     hybrid: HybridCoiling | None = None
 
 

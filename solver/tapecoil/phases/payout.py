@@ -32,7 +32,7 @@ from tapecoil import theory
 from tapecoil.config import Config, ConfigError
 from tapecoil.core.dofs import global_size
 from tapecoil.measures.payout import payout_measures
-from tapecoil.phases.coiling import CoilingModel, read_checkpoint
+from tapecoil.phases.coiling import CoilingProblem, read_checkpoint
 from tapecoil.phases.coiling_run import CoilingRun, HubTurningPhase
 from tapecoil.phases.runner import LOG, run_phase
 
@@ -86,7 +86,7 @@ class PayoutPhase(PayoutReport, HubTurningPhase):
 
     name, checkpoint_name = "payout", "paid_out"
 
-    def __init__(self, model: CoilingModel, stop=None, restart: dict | None = None):
+    def __init__(self, model: CoilingProblem, stop=None, restart: dict | None = None):
         super().__init__(model)
         config = model.config
         # a restart goes on from the stopped payout's state towards the same end
@@ -119,11 +119,11 @@ def run_payout(
     directory: str | Path,
     comm=MPI.COMM_WORLD,
     stowed: str | Path | None = None,
-    model: CoilingModel | None = None,
+    model: CoilingProblem | None = None,
     progress: bool = True,
     stop=None,
     resume: str | Path | None = None,
-) -> tuple[dict, CoilingModel]:
+) -> tuple[dict, CoilingProblem]:
     """Pay the tape out from the stowed state into ``directory``; returns the summary and model.
 
     The start is the coiling ``model`` in its stowed state, or the stowed checkpoint ``stowed``;

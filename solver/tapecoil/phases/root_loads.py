@@ -71,7 +71,7 @@ def loads_on_hub(local: np.ndarray, comm, axis) -> dict[str, float]:
 
 
 class RootLoads:
-    """The root's loads on the hub of a :class:`~tapecoil.phases.deployment.DeploymentModel`;
+    """The root's loads on the hub of a :class:`~tapecoil.phases.deployment.DeploymentProblem`;
     call it after a converged step (collective)."""
 
     def __init__(self, model, eps: float = 1e-6):

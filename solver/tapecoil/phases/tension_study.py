@@ -12,7 +12,7 @@ from mpi4py import MPI
 from tapecoil import theory
 from tapecoil.config import Config, ConfigError
 from tapecoil.measures.coil_section import CoilSection
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingProblem
 from tapecoil.phases.coiling_run import CoilingRun
 
 
@@ -66,7 +66,7 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
     A ``study.length`` piece of the tape is flattened and coiled by ``study.hub_angle`` with the
     pull T = ``study.excess`` + Eq. 2.6 at r_c (a pull above what the hub needs). The coiling
     tension T - N (N: the axial force carried into the root, see
-    :meth:`CoilingModel.edge_forces`) oscillates as nodes pass the lift-off
+    :meth:`CoilingProblem.edge_forces`) oscillates as nodes pass the lift-off
     point; its mean over the hub angles in ``study.window`` is the measured value. The contact
     bracket is the plain one: the smoothed bracket (``contact.smoothing``) holds the tape a few
     smoothing widths off the coil, which lowers the measured tension, most in proportion where
@@ -98,7 +98,7 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
         contact=dataclasses.replace(config.contact, smoothing=0.0),
     )
     t0 = time.perf_counter()
-    model = CoilingModel(case, comm)
+    model = CoilingProblem(case, comm)
     run = CoilingRun(model, max_step=study.max_step)
     run.flatten()
     run.coil(study.hub_angle)
@@ -126,7 +126,7 @@ def coiling_tension(config: Config, comm=MPI.COMM_WORLD, study: TensionStudy | N
     }
 
 
-def coil_section_readings(model: CoilingModel, winding: tuple[float, float]) -> dict[str, float]:
+def coil_section_readings(model: CoilingProblem, winding: tuple[float, float]) -> dict[str, float]:
     """The coil's own sections between the winding angles ``winding`` [rad] at the current
     state, against the flattened plate and the plate with its edge layers (collective)."""
     config = model.config

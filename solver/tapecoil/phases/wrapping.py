@@ -41,7 +41,7 @@ from tapecoil.geometry.meshes import FREE_END
 from tapecoil.measures.centre_line import edge_lines
 from tapecoil.measures.wrap import wrap_measure
 from tapecoil.models.edges import facet_condition
-from tapecoil.phases.coiling import CoilingModel
+from tapecoil.phases.coiling import CoilingProblem
 from tapecoil.phases.coiling_run import CoilingRun
 
 
@@ -121,7 +121,7 @@ class EndDisplacement:
     """The free end's displacement along the guide (+x) prescribed: the end held at its position
     ``u_x0`` (per node, at the moment of the switch) plus ``d``."""
 
-    def __init__(self, model: CoilingModel):
+    def __init__(self, model: CoilingProblem):
         self.value, self.bc = facet_condition(model.model, (0, 0), model.strip.facet_tags.find(FREE_END))
         self.start = model.model.q.sub(0).sub(0).collapse().x.array.copy()
         self.value.x.array[:] = self.start
@@ -155,7 +155,7 @@ def wrap_case(config: Config, study: WrapStudy, extra_length: float = 0.0) -> Co
     )
 
 
-def wrap_reading(model: CoilingModel, wrap: float, tolerance: float) -> dict:
+def wrap_reading(model: CoilingProblem, wrap: float, tolerance: float) -> dict:
     """The wrap's conformity, folds and section rise at the current state, the hub at ``wrap``
     [rad], within ``tolerance`` thicknesses (:func:`~tapecoil.measures.wrap.wrap_measure`;
     collective). The winding angles are read from the state first: an end's motion draws
@@ -191,7 +191,7 @@ def wrapping_tension(config: Config, comm=MPI.COMM_WORLD, study: WrapStudy | Non
     case = wrap_case(config, study)
     pull = case.coiling.tension
     t0 = time.perf_counter()
-    model = CoilingModel(case, comm)
+    model = CoilingProblem(case, comm)
     run = CoilingRun(model, max_step=study.wrap_step)
     history: list[dict] = []
 

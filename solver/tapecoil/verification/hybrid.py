@@ -310,7 +310,7 @@ def coiled_shell_fit(
     import ufl
 
     from tapecoil.models.window import carry_over, full_shell
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
     tp, wall = config.tape, config.wall
@@ -325,7 +325,7 @@ def coiled_shell_fit(
         mesh=dataclasses.replace(config.mesh, preset="default"),
         contact=dataclasses.replace(config.contact, smoothing=0.0),
     )
-    model = CoilingModel(case, comm)
+    model = CoilingProblem(case, comm)
     run = CoilingRun(model)
     run.flatten()
     run.coil(3.0)

@@ -139,7 +139,7 @@ def coil_side_by_side(
     comparison that the readings' swing from step to step leaves uncertain by several per cent."""
     import dataclasses
 
-    from tapecoil.phases.coiling import CoilingModel
+    from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
     from tapecoil.phases.hybrid_coiling import HybridCoiling
     from tapecoil.phases.hybrid_coiling_run import settle
@@ -164,7 +164,7 @@ def coil_side_by_side(
     hybrid_wall = time.perf_counter() - t0
     # the full shell put in the hybrid's configuration and settled there (a hybrid run's
     # stowed state), to set beside the full shell's own coiling
-    settled = CoilingModel(case, comm)
+    settled = CoilingProblem(case, comm)
     hybrid.carry_into(settled)
     settling = settle(settled, hybrid.angle)
     geometry = hybrid.coil_geometry()
@@ -192,7 +192,7 @@ def coil_side_by_side(
     }
 
     t0 = time.perf_counter()
-    model = CoilingModel(case, comm)
+    model = CoilingProblem(case, comm)
     run = CoilingRun(model)
     run.flatten()
     run.coil(angle, stops=stops[:-1])

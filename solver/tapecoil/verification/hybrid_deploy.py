@@ -49,8 +49,8 @@ def deploy_side_by_side(
     deployment; the hybrid's message if it stopped before ``lambda_end`` (its rows up to there
     kept), its coiling's wall time [s] and steps, its window moves (time, start, end), their
     settling figures and its rows' energies (collective)."""
-    from tapecoil.phases.coiling import CoilingModel
-    from tapecoil.phases.deployment import DeploymentModel
+    from tapecoil.phases.coiling import CoilingProblem
+    from tapecoil.phases.deployment import DeploymentProblem
     from tapecoil.phases.deployment_run import DeploymentRun
     from tapecoil.phases.hybrid_coiling import HybridCoiling
     from tapecoil.phases.hybrid_coiling_run import settle
@@ -106,11 +106,11 @@ def deploy_side_by_side(
     if not full_shell:
         return results
 
-    model = CoilingModel(case, comm)
+    model = CoilingProblem(case, comm)
     coiling.carry_into(model)
     settle(model, coiling.angle)
     t0 = time.perf_counter()
-    full = DeploymentModel(model.tape, case)
+    full = DeploymentProblem(model.tape, case)
     run = DeploymentRun(full)
     result = run.run()
     full_wall = time.perf_counter() - t0
