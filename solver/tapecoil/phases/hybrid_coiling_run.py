@@ -213,6 +213,7 @@ class HybridCoilingPhase(HubTurningPhase):
             "process_wall_time": time.perf_counter() - t_start,
             "windows": [list(w) for w in self.windows],
             "settling": self.settling,
+            "account": settling_account(self.settling),
         }
 
     def summary(self, interrupted, t_start: float) -> dict:
@@ -333,3 +334,19 @@ def coil_again(config: Config, comm=MPI.COMM_WORLD) -> HybridCoiling:
     coiling.flatten()
     coiling.coil(config.coiling.hub_angle)
     return coiling
+
+
+def settling_account(settling: dict) -> str | None:
+    """How the hybrid's coil became the full shell's stowed state, for the report (None before
+    the settling)."""
+    if not settling:
+        return None
+    return (
+        "Coiled by the shell-beam hybrid (its DOFs above at their most), whose coiled "
+        "configuration was carried into the full shell and settled there in "
+        f"{settling['newton_iterations']} Newton iterations: strain energy "
+        f"{settling['strain_energy_hybrid']:.6g} J in the hybrid, "
+        f"{settling['strain_energy_settled']:.6g} J settled, the nodes moved by at most "
+        f"{1e3 * settling['largest_displacement']:.3g} mm. The stowed state and the coil's "
+        "measures are the full shell's."
+    )

@@ -205,6 +205,13 @@ class HybridDeploymentPhase(Phase):
                 "mesh": f"{res.along} x {res.across}",
                 **step_figures(history),
                 "window_moves": max(len(self.moves) - 1, 0),
+                "account": (
+                    "Deployed by the hybrid from its own coiled state, its shell window following "
+                    f"the lift-off down the coil ({max(len(self.moves) - 1, 0)} moves; DOFs above at "
+                    "their most). The pictures and snapshots are the hybrid's state carried into the "
+                    "full shell; the root's loads are the reaction of the flattened beam's clamped "
+                    "root node, and of the window's root edge once the window reaches the root."
+                ),
                 "placed_sections_settled": {
                     "newton_iterations": int(sum(p["iterations"] for p in placed)),
                     "largest_displacement": max((p["moved"] for p in placed), default=0.0),

@@ -145,33 +145,18 @@ def _run_table(summary: dict) -> str:
             continue
         p, run = summary[phase], summary[phase]["run"]
         state = "completed" if p["completed"] else html.escape(p["message"] or "stopped")
-        name = f"{phase} (hybrid)" if run.get("model") == "hybrid" else phase
+        name = f"{phase} ({plots.model_name(run)})"
         lines.append(
             f"<tr><td>{name}</td><td>{state}</td><td>{run['mesh']}</td><td>{run['dofs']:,}</td>"
             f"<td>{run['ranks']}</td><td>{run['steps']}</td><td>{run['newton_iterations']:,}</td>"
             f"<td>{run['wall_time']:.1f} s</td></tr>"
         )
     lines.append("</table>")
-    settling = summary.get("coiling", {}).get("run", {}).get("settling")
-    if settling:
-        lines.append(
-            "<p>Coiled by the shell-beam hybrid (its DOFs above at their most), whose coiled "
-            "configuration was carried into the full shell and settled there in "
-            f"{settling['newton_iterations']} Newton iterations: strain energy "
-            f"{settling['strain_energy_hybrid']:.6g} J in the hybrid, "
-            f"{settling['strain_energy_settled']:.6g} J settled, the nodes moved by at most "
-            f"{1e3 * settling['largest_displacement']:.3g} mm. The stowed state and the coil's "
-            "measures are the full shell's.</p>"
-        )
-    deployment = summary.get("deployment", {}).get("run", {})
-    if deployment.get("model") == "hybrid":
-        lines.append(
-            "<p>Deployed by the hybrid from its own coiled state, its shell window following the "
-            f"lift-off down the coil ({deployment['window_moves']} moves; DOFs above at their "
-            "most). The pictures and snapshots are the hybrid's state carried into the full "
-            "shell; the root's loads are the reaction of the flattened beam's clamped root node, "
-            "and of the window's root edge once the window reaches the root.</p>"
-        )
+    # how a model computed a phase, in its own words (the hybrid: what the full shell took from it)
+    for phase in ("coiling", "deployment", "payout"):
+        account = summary.get(phase, {}).get("run", {}).get("account")
+        if account:
+            lines.append(f"<p>{html.escape(account)}</p>")
     return "\n".join(lines)
 
 
