@@ -11,6 +11,7 @@ from tapecoil.measures.interlayer import (
     complete_turns,
     interface_forces,
     interlayer_measures,
+    spread_cuts,
     turn_axial_force,
 )
 
@@ -79,3 +80,37 @@ def test_a_ring_out_of_equilibrium_fails_the_jump():
     jump = interlayer_measures(forces, 0.0, turn_force, 0.0)["pressure_jump"]
     assert not jump["passed"]
     assert jump["turn"] == 2 and jump["computed"] == pytest.approx(0.9)
+
+
+def test_the_hub_carries_the_sum_of_the_jumps_to_a_percent():
+    turn_force = np.array([1.0, 1.0, 1.0, 1.0])
+    forces = np.array([0.0, 3.0, 2.0, 1.0, 0.0]) * 2 * math.pi
+    pressed = 4 * 2 * math.pi  # the integral of N = 1 over four pressed turns
+    held = interlayer_measures(forces, 1.005 * pressed, turn_force, pressed)["hub_reaction"]
+    assert held["passed"] and held["computed"] == pytest.approx(1.005)
+    short = interlayer_measures(forces, 0.98 * pressed, turn_force, pressed)["hub_reaction"]
+    assert not short["passed"]
+
+
+def test_cuts_spread_across_an_element_undo_the_lumping_of_the_nodal_forces():
+    """A coil of rings of N = 1 whose pressure is lumped at the nodes of Q2 elements one radian
+    long (a coarse mesh's), as the contact lumps it: corner nodes a third of an element's
+    share, mid-side nodes two thirds. One cut counts a different share of them in each turn;
+    cuts spread across one element's angle read each jump to a percent."""
+    element, turns = 0.98, 7
+    end = 2 * math.pi * turns
+    nodes = np.arange(0.0, end - 2 * math.pi, element / 2)
+    share = np.where(np.arange(len(nodes)) % 2 == 0, element / 3, 2 * element / 3)
+    # the force per unit angle under the point at psi: N = 1 times the turns above it, smoothed
+    # along the coil (a spiral's), so that each ring's jump is 1 x 2 pi
+    above = (end - nodes) / (2 * math.pi) - 1
+    force = share * above
+    psi_partner = nodes + 2 * math.pi
+    K = complete_turns(end - 2 * math.pi)
+    one = interface_forces(nodes, psi_partner, force, K + 1)
+    cuts = spread_cuts(element)
+    spread = np.mean([interface_forces(nodes, psi_partner, force, K + 1, c) for c in cuts], axis=0)
+    lumped = [(one[k] - one[k + 1]) / (2 * math.pi) for k in range(1, K - 1)]
+    averaged = [(spread[k] - spread[k + 1]) / (2 * math.pi) for k in range(1, K - 1)]
+    assert max(abs(r - 1) for r in lumped) > 0.1
+    assert max(abs(r - 1) for r in averaged) < 0.01
