@@ -214,6 +214,17 @@ def test_a_verification_case_whose_solve_fails_is_reported_not_raised(monkeypatc
     assert main(["verify", "stress-free", "--json"]) == 0
 
 
+def test_verify_writes_the_curve_of_a_case_that_follows_a_path(tmp_path, capsys):
+    """The roof's load-deflection through its snap (a case of CURVE_FILES) as CSV and plot; a
+    case without a path writes none."""
+    assert main(["verify", "roof-snap-through", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    written = sorted(p.suffix for p in tmp_path.iterdir())
+    assert written == [".csv", ".png"] and out.count("wrote ") == 2
+    assert main(["verify", "stress-free", "--out", str(tmp_path / "plain")]) == 0
+    assert "wrote " not in capsys.readouterr().out and not (tmp_path / "plain").exists()
+
+
 def test_verify_refuses_a_hybrid_case_on_a_laminated_tape(capsys):
     """Refused before anything is built, with the reason; "all" skips those cases instead."""
     from pathlib import Path

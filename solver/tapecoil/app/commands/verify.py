@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from tapecoil.app.commands.common import echo, rank
 from tapecoil.config import load_config
@@ -83,22 +84,31 @@ def cmd_verify(args: argparse.Namespace) -> int:
     return 0 if all(r.passed for r in results) and not stopped else 1
 
 
+def _moment_rotation_files(result, directory: Path) -> list:
+    from tapecoil.post.paths import moment_rotation_files
+
+    return moment_rotation_files(result.info["senses"], directory, f"{result.case} ({result.info['mesh']})")
+
+
+def _roof_files(result, directory: Path) -> list:
+    from tapecoil.post.paths import roof_files
+    from tapecoil.verification.roof import SZE_PMAX, SZE_ROOF_LIMIT
+
+    ratio, w = SZE_ROOF_LIMIT[result.info["thickness"]]
+    return roof_files(result.case, result.info, (ratio * SZE_PMAX, w), directory)
+
+
+# the cases that follow a path write its curve (CSV and plot): the roof's load-deflection, the
+# tape's moment-rotation
+CURVE_FILES = {
+    "tape-moment-rotation": _moment_rotation_files,
+    "roof-snap-through": _roof_files,
+    "roof-snap-back": _roof_files,
+}
+
+
 def case_files(result, directory) -> list:
-    """The curves of a case that follows a path, as a CSV and a plot into ``directory`` (the
-    roof's load-deflection, the tape's moment-rotation); none for the other cases. Serial."""
-    from pathlib import Path
-
-    directory = Path(directory)
-    if result.case == "tape-moment-rotation":
-        from tapecoil.post.paths import moment_rotation_files
-
-        return moment_rotation_files(
-            result.info["senses"], directory, f"{result.case} ({result.info['mesh']})"
-        )
-    if result.case.startswith("roof-"):
-        from tapecoil.post.paths import roof_files
-        from tapecoil.verification.roof import SZE_PMAX, SZE_ROOF_LIMIT
-
-        ratio, w = SZE_ROOF_LIMIT[result.info["thickness"]]
-        return roof_files(result.case, result.info, (ratio * SZE_PMAX, w), directory)
-    return []
+    """The curves of a case that follows a path, as a CSV and a plot into ``directory``
+    (:data:`CURVE_FILES`); none for the other cases. Serial."""
+    writer = CURVE_FILES.get(result.case)
+    return [] if writer is None else writer(result, Path(directory))
