@@ -7,16 +7,15 @@ methods (``tape.coil_geometry(angle)``). All are collective.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 from mpi4py import MPI
 
-if TYPE_CHECKING:
-    from tapecoil.phases.tape_on_hub import TapeOnHub
+# ``tape`` below: a tape on its hub as the phases hold it (tapecoil.phases.tape_on_hub.TapeOnHub),
+# read, never named: the measures sit below the phases
 
 
-def centre_nodes(tape: TapeOnHub) -> np.ndarray:
+def centre_nodes(tape) -> np.ndarray:
     """Mask of this rank's owned nodes on the centre line (the line of xi_2 nearest 0; collective)."""
     nodes = tape.contact.nodes
     distance = np.abs(nodes.xi[1, : nodes.space.dofmap.index_map.size_local])
@@ -24,7 +23,7 @@ def centre_nodes(tape: TapeOnHub) -> np.ndarray:
     return distance <= tape.comm.allreduce(local_min, op=MPI.MIN) + 1e-9 * tape.config.tape.b
 
 
-def _line(tape: TapeOnHub, mask: np.ndarray) -> dict[str, np.ndarray]:
+def _line(tape, mask: np.ndarray) -> dict[str, np.ndarray]:
     """The owned nodes of ``mask`` on every rank, sorted along the tape: xi_1, psi, radius."""
     nodes = tape.contact.nodes
     n_owned = nodes.space.dofmap.index_map.size_local
@@ -37,7 +36,7 @@ def _line(tape: TapeOnHub, mask: np.ndarray) -> dict[str, np.ndarray]:
     return {"xi1": rows[:, 0], "psi": rows[:, 1], "radius": rows[:, 2]}
 
 
-def edge_lines(tape: TapeOnHub) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+def edge_lines(tape) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """The two free edges (xi_2 = -b/2 and +b/2) of the whole tape, as :func:`centre_line`
     (collective, every rank)."""
     nodes = tape.contact.nodes
@@ -47,7 +46,7 @@ def edge_lines(tape: TapeOnHub) -> tuple[dict[str, np.ndarray], dict[str, np.nda
     return _line(tape, xi2 <= -half + near), _line(tape, xi2 >= half - near)
 
 
-def centre_line(tape: TapeOnHub) -> dict[str, np.ndarray]:
+def centre_line(tape) -> dict[str, np.ndarray]:
     """Centre-line nodes of the whole tape, sorted along it (collective, every rank).
 
     Columns: xi_1, winding angle psi, mid-surface distance from the hub axis.
@@ -55,7 +54,7 @@ def centre_line(tape: TapeOnHub) -> dict[str, np.ndarray]:
     return _line(tape, centre_nodes(tape))
 
 
-def coil_geometry(tape: TapeOnHub, angle: float) -> dict[str, float]:
+def coil_geometry(tape, angle: float) -> dict[str, float]:
     """Coiled length and outer coil radius [m] (collective).
 
     The coiled length is the material length behind the tangent point, where the centre

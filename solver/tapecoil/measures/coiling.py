@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 import ufl
@@ -19,8 +18,8 @@ from tapecoil.measures.deployment import lift_off
 from tapecoil.measures.interlayer import coil_interlayer
 from tapecoil.measures.measure import Measure
 
-if TYPE_CHECKING:
-    from tapecoil.phases.tape_on_hub import TapeOnHub
+# ``tape`` below: a tape on its hub as the phases hold it (tapecoil.phases.tape_on_hub.TapeOnHub),
+# read, never named: the measures sit below the phases
 
 
 def _ramps(psi: np.ndarray, ramp_width: float, margin: float) -> np.ndarray:
@@ -29,7 +28,7 @@ def _ramps(psi: np.ndarray, ramp_width: float, margin: float) -> np.ndarray:
     return (phase >= 2 * math.pi - ramp_width - margin) | (phase <= margin)
 
 
-def ploy_measure(tape: TapeOnHub, coiled=None, xi1=None, xi2=None, k_trans=None) -> dict:
+def ploy_measure(tape, coiled=None, xi1=None, xi2=None, k_trans=None) -> dict:
     """The ploy (transition) region at the current state against physics.md Sec. 7 (collective).
 
     Along the cells next to the centre line beyond the tangent point: the length over which the
@@ -66,7 +65,7 @@ def ploy_measure(tape: TapeOnHub, coiled=None, xi1=None, xi2=None, k_trans=None)
     }
 
 
-def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
+def coil_measures(tape, cells: dict | None = None) -> dict:
     """Measured quantities of the coil at the current state against physics.md (collective).
 
     ``cells``: :func:`coiled_cells` of the current state, if the caller has them already.
@@ -255,7 +254,7 @@ def coil_measures(tape: TapeOnHub, cells: dict | None = None) -> dict:
     return out
 
 
-def coiled_cells(tape: TapeOnHub) -> dict[str, np.ndarray]:
+def coiled_cells(tape) -> dict[str, np.ndarray]:
     """Cell-midpoint values of the current state for the pictures (collective, every rank).
 
     Columns: xi_1, xi_2 [m], winding angle [rad], longitudinal and transverse curvature [1/m],

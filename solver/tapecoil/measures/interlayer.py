@@ -34,7 +34,6 @@ lift-off).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import dolfinx
 import numpy as np
@@ -44,8 +43,8 @@ from mpi4py import MPI
 from tapecoil.geometry.meshes import ROOT
 from tapecoil.measures.measure import Measure
 
-if TYPE_CHECKING:
-    from tapecoil.phases.tape_on_hub import TapeOnHub
+# ``tape`` below: a tape on its hub as the phases hold it (tapecoil.phases.tape_on_hub.TapeOnHub),
+# read, never named: the measures sit below the phases
 
 # the statics of a ring holds the jumps to the contact's resolution of the pressure, which the
 # penalty spreads over the nodes: 5 % of a jump
@@ -147,7 +146,7 @@ def interlayer_measures(
     return out
 
 
-def coil_interlayer(tape: TapeOnHub) -> dict | None:
+def coil_interlayer(tape) -> dict | None:
     """The interlayer measures of a full shell's coil at its current state (collective; None
     without the turns' real contact, or with fewer than three complete turns)."""
     if tape.turns is None:
@@ -184,7 +183,7 @@ def coil_interlayer(tape: TapeOnHub) -> dict | None:
     return interlayer_measures(forces, hub, turn_force, pressed_integral)
 
 
-def clamp_radial_reaction(tape: TapeOnHub) -> float:
+def clamp_radial_reaction(tape) -> float:
     """The root clamp's push on the tape away from the hub's axis [N] (collective): the internal
     force dE/dq (strain, the hub's and the turns' contact) on the root edge's displacements,
     which the clamp balances, along the hub's radius at the root."""

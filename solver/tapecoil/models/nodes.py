@@ -7,17 +7,15 @@ the shell first are also its methods (``model.angles_of(d, xi)``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from tapecoil.models.director import angles_from_director
 
-if TYPE_CHECKING:
-    from tapecoil.models.shell import NaghdiShell
+# ``shell``/``model`` below: the NaghdiShell these functions serve as its methods, read, never
+# imported (the shell imports them)
 
 
-def director_frame_numpy(shell: NaghdiShell, xi: np.ndarray):
+def director_frame_numpy(shell, xi: np.ndarray):
     """The director frame (e1, e2, e3) and reference angles (2, n) at parameter points."""
     local = shell.strip.geometry.frame(xi)
     if shell.director_frame == "local":
@@ -28,7 +26,7 @@ def director_frame_numpy(shell: NaghdiShell, xi: np.ndarray):
     return frame, np.vstack([-np.arcsin(np.clip(n0[1], -1, 1)), np.arctan2(n0[0], n0[2])])
 
 
-def angles_of(shell: NaghdiShell, d: np.ndarray, xi: np.ndarray, rotation_near: float = 0.0) -> np.ndarray:
+def angles_of(shell, d: np.ndarray, xi: np.ndarray, rotation_near: float = 0.0) -> np.ndarray:
     """Unknown angles theta (2, n) that give the directors d (3, n) at parameter points xi.
 
     The unbounded theta_1 is taken on the branch nearest ``rotation_near`` [rad].
@@ -46,7 +44,7 @@ class Nodes:
     done on ghosts as on owners from the same values, give every rank the same values.
     """
 
-    def __init__(self, model: NaghdiShell):
+    def __init__(self, model):
         from tapecoil.core import compat
 
         W = model.W

@@ -7,24 +7,22 @@ its methods (``model.energy_secant_forms(q_old)``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import ufl
 
 from tapecoil.models.director import director_secant
 
-if TYPE_CHECKING:
-    from tapecoil.models.shell import NaghdiShell
+# ``shell``/``model`` below: the NaghdiShell these functions serve as its methods, read, never
+# imported (the shell imports them)
 
 
-def director_variation(shell: NaghdiShell, q_old):
+def director_variation(shell, q_old):
     """The virtual director Dd_bar dtheta of the step from ``q_old`` to q (see director_secant)."""
     _, theta_old, _, _ = shell.kinematics(q_old)
     secant = director_secant(shell.theta_ref + theta_old, shell.theta_ref + shell.theta, shell.frame)
     return ufl.dot(secant, ufl.split(shell.dq)[1])
 
 
-def energy_secant_forms(shell: NaghdiShell, q_old):
+def energy_secant_forms(shell, q_old):
     """(membrane, bending, shear) internal virtual work, energy-consistent from q_old to q.
 
     Each strain is at most quadratic in (F, d), so with the stresses of the mean strain and

@@ -9,16 +9,14 @@ drives its coefficient) and the magnitudes behind the round-off floor of the con
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import ufl
 
-if TYPE_CHECKING:
-    from tapecoil.models.shell import NaghdiShell
+# ``shell``/``model`` below: the NaghdiShell these functions serve as its methods, read, never
+# imported (the shell imports them)
 
 
-def rounding_scale(shell: NaghdiShell):
+def rounding_scale(shell):
     """The magnitude of what each state component is added to, for the solver's round-off
     floor: |phi0| for the displacement (the position phi0 + u rounds to eps |phi0 + u|),
     1 for the director angles (the director's components, of size 1, round to eps)."""
@@ -34,7 +32,7 @@ def rounding_scale(shell: NaghdiShell):
     return scale
 
 
-def relaxation(shell: NaghdiShell, length_scale: float):
+def relaxation(shell, length_scale: float):
     """Viscous term for pseudo-transient relaxation: (coefficient, previous state, form).
 
     coefficient * [(u - u_prev).du + length_scale^2 (theta - theta_prev).dtheta] over the

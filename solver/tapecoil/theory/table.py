@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from tapecoil.theory.coil_geometry import (
     coil_radius_during_deployment,
@@ -32,8 +31,7 @@ from tapecoil.theory.plate import (
     ploy_length,
 )
 
-if TYPE_CHECKING:  # the configuration is read, never imported: config sits above theory
-    from tapecoil.config import Config
+# ``config`` below: a tapecoil.config.Config, read, never named: config sits above theory
 
 
 @dataclass(frozen=True)
@@ -47,7 +45,7 @@ class Prediction:
     source: str
 
 
-def predictions(config: Config) -> list[Prediction]:
+def predictions(config) -> list[Prediction]:
     """Every analytic prediction of the physics brief for a configuration, in report order."""
     tp, r_hub = config.tape, config.hub.radius
     theta = config.coiling.hub_angle
