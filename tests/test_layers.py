@@ -3,9 +3,9 @@
 Each module of ``solver/tapecoil`` is parsed (``ast``, nothing imported) and every import of
 tapecoil's is checked against :data:`LAYERS`: a package imports from the layers below its own
 and from its own package, never from a layer above nor from another package of its own layer.
-An import inside a function counts (a lazy import is still a dependency); one under ``if
-TYPE_CHECKING:`` does not (it names a type for the reader, nothing runs it). Neither the
-packages nor the modules may import each other in a cycle.
+An import inside a function counts (a lazy import is still a dependency), and so does one
+under ``if TYPE_CHECKING:``: a lower layer reads what a higher one hands it without naming its
+class. Neither the packages nor the modules may import each other in a cycle.
 """
 
 from __future__ import annotations
@@ -62,18 +62,6 @@ def module_names(root: Path = PACKAGE) -> dict[str, Path]:
     return names
 
 
-def _type_checking_nodes(tree: ast.AST) -> set[int]:
-    """The ids of the nodes inside ``if TYPE_CHECKING:`` blocks (not their ``else``)."""
-    inside = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.If):
-            test = node.test
-            name = test.id if isinstance(test, ast.Name) else getattr(test, "attr", None)
-            if name == "TYPE_CHECKING":
-                inside |= {id(child) for statement in node.body for child in ast.walk(statement)}
-    return inside
-
-
 def imports(module: str, source: str, is_package: bool, known: set[str]) -> list[tuple[int, str, str]]:
     """Every import of tapecoil's in ``source``: (line, the statement, the module imported).
 
@@ -81,11 +69,10 @@ def imports(module: str, source: str, is_package: bool, known: set[str]) -> list
     imported from a module that is not in ``known`` is taken to its nearest enclosing module.
     """
     tree = ast.parse(source)
-    skipped = _type_checking_nodes(tree)
     here = module if is_package else module.rpartition(".")[0]
     found = []
     for node in ast.walk(tree):
-        if id(node) in skipped or not isinstance(node, ast.Import | ast.ImportFrom):
+        if not isinstance(node, ast.Import | ast.ImportFrom):
             continue
         statement = ast.unparse(node)
         if isinstance(node, ast.Import):
@@ -226,15 +213,15 @@ KNOWN = {"tapecoil.measures.coil_section", "tapecoil.phases.stepped", "tapecoil.
         ("import tapecoil.phases.stepped as s", True),
         (
             "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from tapecoil.phases import stepped",
-            False,
+            True,
         ),
         ("from tapecoil.config import Config", False),
     ],
     ids=["top-level", "lazy", "import-as", "type-checking", "downward"],
 )
 def test_the_contract_sees_an_upward_import(source, caught):
-    """The checker on a planted measure importing a phase: caught at the top and in a function,
-    not under TYPE_CHECKING, and a downward import passes."""
+    """The checker on a planted measure importing a phase: caught at the top, in a function and
+    under TYPE_CHECKING, and a downward import passes."""
     found = upward_imports(
         {"tapecoil.measures.coil_section": imports("tapecoil.measures.coil_section", source, False, KNOWN)}
     )
