@@ -35,12 +35,9 @@ from __future__ import annotations
 
 import math
 
-import dolfinx
 import numpy as np
-import ufl
 from mpi4py import MPI
 
-from tapecoil.geometry.meshes import ROOT
 from tapecoil.measures.measure import Measure
 
 # ``tape`` below: a tape on its hub as the phases hold it (tapecoil.phases.tape_on_hub.TapeOnHub),
@@ -187,13 +184,6 @@ def clamp_radial_reaction(tape) -> float:
     """The root clamp's push on the tape away from the hub's axis [N] (collective): the internal
     force dE/dq (strain, the hub's and the turns' contact) on the root edge's displacements,
     which the clamp balances, along the hub's radius at the root."""
-    model = tape.model
-    form = dolfinx.fem.form(ufl.derivative(tape.energy, model.q, model.dq))
-    force = dolfinx.fem.Function(model.W)
-    dolfinx.fem.assemble_vector(force.x.array, form)
-    force.x.scatter_reverse(dolfinx.la.InsertMode.add)
-    tape.add_self_contact_force(force)
     frame = tape.frame
     radial = frame.rotation(tape.root.angle) @ np.array([0.0, 0.0, frame.sign])
-    local = sum(radial[i] * float(force.x.array[tape.edge_dofs(ROOT, (0, i))].sum()) for i in range(3))
-    return float(tape.comm.allreduce(local, op=MPI.SUM))
+    return float(radial @ tape.root_force(tape.internal_force()))

@@ -39,9 +39,9 @@ from tapecoil import theory
 from tapecoil.config import Config, ConfigError
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import assemble_into, global_scalar, owned_constrained_dofs
+from tapecoil.core.dofs import global_scalar, owned_constrained_dofs
 from tapecoil.core.newton import SNESSolver
-from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
+from tapecoil.geometry.meshes import FREE_END, MeshResolution
 from tapecoil.models.edges import facet_condition
 from tapecoil.phases.predictors import CoilingPredictor, choose_predictor
 from tapecoil.phases.tape_on_hub import TapeOnHub
@@ -162,7 +162,7 @@ class CoilingProblem:
             state_scale=model.rounding_scale(),
         )
         self.solver.terms += tape.contact_terms(model.q, bcs)
-        self._reaction_form = None
+        self._end_dofs = tape.edge_dofs(FREE_END, (0, 0))
         self.predictor = choose_predictor(config.coiling.predictor, self.element_length, tape.r_hub)
         self.predictions = CoilingPredictor(tape, self.predictor, comm)
 
@@ -197,15 +197,9 @@ class CoilingProblem:
         return global_scalar(self.end_slide_form, self.model.mesh.comm)
 
     def internal_force(self) -> np.ndarray:
-        """The internal force vector dE/dq (strain + hub and turns' contact), local array (collective)."""
-        if self._reaction_form is None:
-            self._reaction_form = dolfinx.fem.form(ufl.derivative(self.energy, self.model.q, self.model.dq))
-            self._reaction_vector = dolfinx.fem.Function(self.model.W)
-            self._end_dofs = self.tape.edge_dofs(FREE_END, (0, 0))
-            self._root_dofs = [self.tape.edge_dofs(ROOT, (0, i)) for i in range(3)]
-        assemble_into(self._reaction_vector, self._reaction_form)
-        self.tape.add_self_contact_force(self._reaction_vector)
-        return self._reaction_vector.x.array
+        """The internal force vector dE/dq (strain, the hub's and the turns' contact, the
+        obstacles), local array (collective)."""
+        return self.tape.internal_force(self.energy)
 
     def hub_torque(self, internal_force: np.ndarray | None = None, eps: float = 1e-6) -> float:
         """The torque the tape exerts on the hub through the root's reactions [N m] (collective).
@@ -243,11 +237,9 @@ class CoilingProblem:
         coiling tension M kappa - U of the first turn: Eq. 2.6 for a flattened coil.
         """
         f = self.internal_force() if internal_force is None else internal_force
-        angle = self.root.angle
-        direction = self.frame.tangent(angle)
-        root = sum(direction[i] * float(f[dofs].sum()) for i, dofs in enumerate(self._root_dofs))
-        end, root = self.comm.allreduce(np.array([float(f[self._end_dofs].sum()), root]), op=MPI.SUM)
-        return {"tension": float(end), "root_tension": -float(root)}
+        root = float(self.frame.tangent(self.root.angle) @ self.tape.root_force(f))
+        end = self.comm.allreduce(float(f[self._end_dofs].sum()), op=MPI.SUM)
+        return {"tension": float(end), "root_tension": -root}
 
 
 # -- checkpoint -------------------------------------------------------------------------------

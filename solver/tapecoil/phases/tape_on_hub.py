@@ -14,6 +14,7 @@ from pathlib import Path
 
 import dolfinx
 import numpy as np
+import ufl
 from mpi4py import MPI
 
 from tapecoil.config import Config
@@ -21,7 +22,7 @@ from tapecoil.contact.surface import ShellSurface
 from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core import checkpoint
 from tapecoil.core.checkpoint import state_parts
-from tapecoil.core.dofs import global_scalar
+from tapecoil.core.dofs import assemble_into, global_scalar
 from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_strip_mesh
 from tapecoil.geometry.sections import CircularArcSection
 from tapecoil.geometry.surfaces import StripGeometry
@@ -84,6 +85,8 @@ class TapeOnHub:
         if self.contact.energy_coil is not None:
             parts.append(("contact_coil", self.contact.energy_coil))
         self.forms = {name: dolfinx.fem.form(form) for name, form in parts}
+        self._internal: dict[int, tuple] = {}
+        self._root_dofs = None
 
     def edge_dofs(self, tag: int, sub: tuple[int, ...]) -> np.ndarray:
         """Owned W-dofs (local indices) of the state component ``sub`` on the edge ``tag``."""
@@ -148,6 +151,28 @@ class TapeOnHub:
             f"contact.stop_penetration = {limit:g} h: the contact no longer keeps the faces apart "
             "(a stiffer contact.penalty_scale or a finer mesh)"
         )
+
+    def internal_force(self, energy=None) -> np.ndarray:
+        """The internal force dE/dq at the current state, local array of W (collective): E the
+        tape's strain and hub contact (``energy``: a phase's own, with its obstacles), plus the
+        turns' real contact. What the root's attachment and the free end's guide balance."""
+        energy = self.energy if energy is None else energy
+        cached = self._internal.get(id(energy))
+        if cached is None:  # the energy is kept with its form, so that its id stays its own
+            form = dolfinx.fem.form(ufl.derivative(energy, self.model.q, self.model.dq))
+            cached = self._internal[id(energy)] = (energy, form, dolfinx.fem.Function(self.model.W))
+        _, form, vector = cached
+        assemble_into(vector, form)
+        self.add_self_contact_force(vector)
+        return vector.x.array
+
+    def root_force(self, force: np.ndarray) -> np.ndarray:
+        """The sum of ``force`` (a local array of W) over the root edge's displacements, a
+        vector in the global frame [N] (collective)."""
+        if self._root_dofs is None:
+            self._root_dofs = [self.edge_dofs(ROOT, (0, i)) for i in range(3)]
+        local = np.array([float(force[dofs].sum()) for dofs in self._root_dofs])
+        return self.comm.allreduce(local, op=MPI.SUM)
 
     def add_self_contact_force(self, force: dolfinx.fem.Function) -> None:
         """Add the force of the turns' real contact dE/dq at the current state to ``force``
