@@ -77,6 +77,48 @@ def test_search_finds_the_sheet_above_and_not_its_own_neighbourhood():
     assert search.valid_for(nodes + 0.4 * h, query) and not search.valid_for(nodes + 1.1 * h, query)
 
 
+def test_search_keeps_every_cell_with_a_node_in_reach_and_clear_of_the_query():
+    """The candidate list against its definition, pair by pair, on a wound strip of Q2 cells
+    (three turns 1.5 h apart) queried for a subset of its nodes: every (node, cell) with a
+    node of the cell within the search radius of the node, whose bounding sphere comes within
+    reach + buffer of it and whose material box lies at least the exclusion away."""
+    import basix
+
+    h, turns, along = 1e-4, 3, 60
+    ref = basix.create_element(basix.ElementFamily.P, basix.CellType.quadrilateral, 2).points
+    nodes, cells, material = [], [], []
+    for k in range(turns * along):
+        s = (k + ref[:, 0]) / along  # turns of the spiral
+        angle, y = 2 * np.pi * s, 0.004 * ref[:, 1]
+        radius = 0.01 + 1.5 * h * s
+        cells.append(np.arange(len(nodes), len(nodes) + 9))
+        nodes.extend(np.column_stack([radius * np.cos(angle), y, radius * np.sin(angle)]))
+        material.extend(np.column_stack([s * 2 * np.pi * 0.01, y]))
+    nodes, cells, material = np.array(nodes), np.array(cells), np.array(material)
+    reach, buffer, exclusion = 1.1 * h, 2 * h, 1e-3
+    search = CandidateSearch(cells, material, exclusion=exclusion, reach=reach, buffer=buffer)
+    query = np.arange(0, len(nodes), 3)
+    node, cell = search.candidates(nodes, query)
+    found = set(zip(node.tolist(), cell.tolist(), strict=True))
+    assert len(found) == len(node)
+
+    xyz = nodes[cells]
+    span = np.linalg.norm(xyz[:, :, None, :] - xyz[:, None, [0, 3], :], axis=-1).max()
+    radius = reach + buffer + 0.5 * span
+    centre = xyz[:, 8]
+    sphere = np.linalg.norm(xyz - centre[:, None, :], axis=2).max(axis=1)
+    lower, upper = material[cells].min(axis=1), material[cells].max(axis=1)
+    expected = set()
+    for q in query:
+        near = np.linalg.norm(xyz - nodes[q], axis=2).min(axis=1) <= radius
+        clear = np.linalg.norm(nodes[q] - centre, axis=1) - sphere <= reach + buffer
+        box = np.linalg.norm(np.maximum(np.maximum(lower - material[q], material[q] - upper), 0.0), axis=1)
+        expected.update((int(q), int(c)) for c in np.flatnonzero(near & clear & (box >= exclusion)))
+    assert found == expected
+    # the turns' neighbours are found: each queried node of a middle turn has cells on both sides
+    assert len(expected) > len(query)
+
+
 @pytest.fixture(scope="module")
 def folded():
     """A flat strip 0.2 m x 0.02 m whose second half is folded over its first at 0.9 h.

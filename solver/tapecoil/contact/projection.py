@@ -115,15 +115,15 @@ class CandidateSearch:
         # every point of a cell lies within half its longest node distance of one of its nodes
         span = np.max(np.linalg.norm(xyz[:, :, None, :] - xyz[:, None, [0, 3], :], axis=-1), axis=(1, 2))
         radius = self.reach + self.buffer + 0.5 * float(span.max(initial=0.0))
-        tree = cKDTree(positions)
-        near = tree.query_ball_point(positions[query], radius)
-        counts = np.array([len(v) for v in near], dtype=np.int64)
-        which = np.repeat(np.arange(len(query)), counts)
-        neighbours = (
-            np.concatenate([np.asarray(v, dtype=np.int64) for v in near])
-            if counts.sum()
-            else np.zeros(0, int)
-        )
+        # every node within the radius of each query node (itself included), from the tree's
+        # pairs as one array: a list per node cost more than the tree's search itself
+        close = cKDTree(positions).query_pairs(radius, output_type="ndarray").astype(np.int64)
+        slot = np.full(len(positions), -1, dtype=np.int64)
+        slot[query] = np.arange(len(query))
+        which = np.concatenate([slot[close[:, 0]], slot[close[:, 1]], np.arange(len(query))])
+        neighbours = np.concatenate([close[:, 1], close[:, 0], np.asarray(query, dtype=np.int64)])
+        asked = which >= 0
+        which, neighbours = which[asked], neighbours[asked]
         start, stop = self.node_cells_start[neighbours], self.node_cells_start[neighbours + 1]
         per = stop - start
         which = np.repeat(which, per)
