@@ -143,6 +143,58 @@ def test_two_ranks_coil_the_hybrid_as_one():
     assert abs(s2 - s1) < 1e-9 * 0.5
 
 
+def test_a_settling_whose_solve_fails_is_tried_again_from_the_carried_state():
+    """The full shell settled from a carried state (here the coarse tape pushed off its unloaded
+    equilibrium) whose first solve fails: the second attempt starts from the carried state again
+    and settles where a settling without the failure does; failing twice, the coiling stops with
+    the carried state put back."""
+    from tapecoil.core.newton import SolveResult
+    from tapecoil.core.stepping import ContinuationError
+    from tapecoil.phases.coiling import CoilingProblem
+    from tapecoil.phases.hybrid_coiling_run import settle
+
+    shell = CoilingProblem(coarse(1.0), MPI.COMM_WORLD)
+    shell.set_flattening(0.0)
+    rng = np.random.default_rng(0)
+    carried = shell.model.q.x.array + 1e-6 * rng.standard_normal(shell.model.q.x.array.shape)
+
+    def carry():
+        shell.model.q.x.array[:] = carried
+        shell.model.q.x.scatter_forward()
+
+    carry()
+    clean = settle(shell, 0.0)
+    assert clean["attempts"] == 1 and clean["newton_iterations"] > 0
+    settled = shell.model.q.x.array.copy()
+
+    solve, calls = shell.solver.solve, []
+
+    def failing(times):
+        def attempt():
+            calls.append(shell.model.q.x.array.copy())
+            if len(calls) <= times:
+                shell.model.q.x.array[:] += 1e-3  # a failed solve leaves its last iterate
+                return SolveResult(False, 1, -3, 1.0)
+            return solve()
+
+        return attempt
+
+    carry()
+    shell.solver.solve = failing(1)
+    retried = settle(shell, 0.0)
+    assert retried["attempts"] == 2 and len(calls) == 2
+    assert np.array_equal(calls[1], carried)  # the second attempt started from the carried state
+    assert np.allclose(shell.model.q.x.array, settled, rtol=0, atol=1e-12)
+    assert retried["strain_energy_settled"] == pytest.approx(clean["strain_energy_settled"], rel=1e-12)
+
+    carry()
+    calls.clear()
+    shell.solver.solve = failing(2)
+    with pytest.raises(ContinuationError, match="2 attempts"):
+        settle(shell, 0.0)
+    assert np.array_equal(shell.model.q.x.array, carried)
+
+
 def test_a_hybrid_run_refuses_a_coil_its_window_never_leaves(tmp_path):
     """The coarse tape coiled 2 rad (0.026 m of coil at most) and deployed by the hybrid: its
     window would never leave the root and hold the whole tape at release, so the run is refused
