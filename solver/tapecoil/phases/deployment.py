@@ -39,6 +39,7 @@ from tapecoil.phases.free_hub import FreeHubCoupling
 from tapecoil.phases.release import EndHold
 from tapecoil.phases.root_loads import RootLoads
 from tapecoil.phases.tape_on_hub import TapeOnHub
+from tapecoil.phases.time_loop import step_error
 
 
 class DeploymentProblem:
@@ -174,22 +175,10 @@ class DeploymentProblem:
         return global_dot(self.model.W, self.solver.b.array, step)
 
     def step_error(self) -> float:
-        """The step's local error in the displacement over its tolerance (collective; before
-        :meth:`advance`); at most 1 is accurate enough.
-
-        The local error e (:meth:`GeneralizedAlpha.local_error`) of the translational dofs, in
-        the root mean square over the nodes, against ``deployment.error_tolerance`` times the
-        step's own displacement, or times the thickness h while the tape barely moves (at
-        release). The director angles are left out: they follow the displacement's gradient.
-        """
-        tol = self.config.deployment.error_tolerance
-        dofs = self._owned_u_dofs
-        error = self.integrator.local_error()[dofs]
-        increment = self.model.q.x.array[dofs] - self.integrator.q_old.x.array[dofs]
-        sums = self.comm.allreduce(np.array([error @ error, increment @ increment, dofs.size]))
-        count = max(sums[2], 1.0)
-        rms_error, rms_increment = np.sqrt(sums[0] / count), np.sqrt(sums[1] / count)
-        return float(rms_error / (tol * (rms_increment + self.config.tape.h)))
+        """The step's local error over its tolerance (:func:`~tapecoil.phases.time_loop.step_error`
+        of the translational dofs; collective; before :meth:`advance`)."""
+        parts = [(self.integrator, self._owned_u_dofs)]
+        return step_error(parts, self.config.deployment.error_tolerance, self.config.tape.h, self.comm)
 
     def advance(self) -> None:
         """After a converged step: the new state, velocities and accelerations become the old."""

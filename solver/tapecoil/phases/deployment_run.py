@@ -17,7 +17,7 @@ from mpi4py import MPI
 
 from tapecoil.config import Config
 from tapecoil.core.dofs import global_size
-from tapecoil.core.stepping import Continuation, ContinuationError
+from tapecoil.core.stepping import ContinuationError
 from tapecoil.measures.deployment import deployment_measures, root_load_peaks
 from tapecoil.phases.deployment import (
     DeploymentProblem,
@@ -25,10 +25,10 @@ from tapecoil.phases.deployment import (
     write_deployment_checkpoint,
 )
 from tapecoil.phases.deployment_rows import DeploymentRows
-from tapecoil.phases.release import smallest_time_step, time_legs
 from tapecoil.phases.runner import LOG, Phase, run_phase
-from tapecoil.phases.stepped import EASY_ITERATIONS, SteppedRun
+from tapecoil.phases.stepped import SteppedRun
 from tapecoil.phases.tape_on_hub import TapeOnHub
+from tapecoil.phases.time_loop import Deployed, TimeStepper, step_in_time, time_legs
 
 
 @dataclass
@@ -36,10 +36,6 @@ class DeploymentResult:
     history: list[dict] = field(default_factory=list)
     completed: bool = False
     message: str = ""
-
-
-class _Deployed(Exception):
-    """Raised from the step callback to end the time loop once lambda reaches lambda_end."""
 
 
 class DeploymentRun(SteppedRun):
@@ -52,8 +48,6 @@ class DeploymentRun(SteppedRun):
     ``on_step(row)`` is called on every rank after each step with its row
     (:class:`~tapecoil.phases.deployment_rows.DeploymentRows`).
     """
-
-    easy_iterations = EASY_ITERATIONS
 
     def __init__(self, model: DeploymentProblem, on_step=None, max_dt: float | None = None, stop=None):
         super().__init__(DeploymentResult(), on_step, stop)
@@ -91,32 +85,20 @@ class DeploymentRun(SteppedRun):
         the last converged one.
         """
         m = self.m
-        cfg = m.config
-        d = cfg.deployment
+        d = m.config.deployment
         ti = m.integrator
         if not self._restored:
             m.initial_acceleration()
             self._record(self.rows.row(0.0, None))
-        smallest = smallest_time_step(d.t_end, d.dt)
-
-        def control(max_dt, span):
-            """Step limits [s] as the fractions of the phase's span the continuation works in."""
-            return cfg.solver.control(
-                initial_step=min(d.dt / span, 1.0),
-                max_step=min(max_dt / span, 1.0),
-                min_step=smallest / span,
-                range_fraction=d.t_end / span,  # [solver] min_step: a fraction of t_end
-            )
-
         alpha_f = ti.parameters.alpha_f
 
-        def set_time(target):
-            dt = target - self.time
+        def set_step(dt, target):
             ti.set_step(dt)
             m.hold.release(target - alpha_f * dt)  # the hold at the level of the internal forces
 
-        def predict(t_from, t_to):
-            m.predict(t_to - t_from)
+        stepper = TimeStepper(
+            m.model.q, m.solve, set_step, m.predict, m.step_error, m.tape.penetration_refusal
+        )
 
         def converged(step, end):
             self.rows.add_step_work()
@@ -127,28 +109,14 @@ class DeploymentRun(SteppedRun):
             self.rows.add_update_energy(m.update())
             row = self._record(self.rows.row(step.load, step))
             if row["lambda"] >= d.lambda_end:
-                raise _Deployed
+                raise Deployed
             self._check_stop(m.comm)
 
+        legs = time_legs(m.hold.release_time, d.t_end, d.dt, self.max_dt)
         try:
-            for end, max_dt in time_legs(m.hold.release_time, d.t_end, d.dt, self.max_dt):
-                if end <= self.time:
-                    continue
-                cont = Continuation(
-                    m.solve,
-                    set_time,
-                    m.model.q,
-                    control(max_dt, end - self.time),
-                    predict=predict,
-                    error=m.step_error if d.error_tolerance > 0 else None,
-                    refusal=m.tape.penetration_refusal,
-                    easy_iterations=self.easy_iterations,
-                )
-                cont.on_step = lambda step, end=end: converged(step, end)
-                first, self.next_step = self.next_step, None
-                cont.run(self.time, end, first_step=first)
+            step_in_time(m.config, legs, self, lambda: stepper, converged)
             self.result.message = f"t_end = {d.t_end:g} s reached before lambda = {d.lambda_end:g}"
-        except _Deployed:
+        except Deployed:
             self.result.completed = True
         except ContinuationError as err:
             # the state is the last converged one (the continuation restored it)

@@ -70,7 +70,7 @@ from tapecoil.contact.term import linear_solver_options
 from tapecoil.core.cell_state import gather_fields, scatter_fields
 from tapecoil.core.coupled_newton import JointState
 from tapecoil.core.dofs import owned_size
-from tapecoil.core.stepping import Continuation, ContinuationError
+from tapecoil.core.stepping import ContinuationError
 from tapecoil.hub.rotor import HubRotor
 from tapecoil.measures.deployment import LIFT_OFF_GAP
 from tapecoil.models.beam_section import BeamSection
@@ -82,9 +82,17 @@ from tapecoil.phases.free_hub import section_moment
 from tapecoil.phases.hybrid_deployment_measures import HybridDeploymentMeasures, coiled_along
 from tapecoil.phases.hybrid_free_hub import HybridFreeHub
 from tapecoil.phases.hybrid_motion import HybridMotion
-from tapecoil.phases.release import EndHold, smallest_time_step, time_legs
+from tapecoil.phases.release import EndHold
 from tapecoil.phases.root_loads import HybridRootLoads
-from tapecoil.phases.stepped import EASY_ITERATIONS, clock_origin, last_wall_time
+from tapecoil.phases.stepped import clock_origin, last_wall_time
+from tapecoil.phases.time_loop import (
+    Deployed,
+    StepOn,
+    TimeStepper,
+    step_error,
+    step_in_time,
+    time_legs,
+)
 
 __all__ = ["CoilLoosening", "DeploymentRecord", "HybridDeployment", "deployment_options"]
 
@@ -169,11 +177,6 @@ def _deploying(coiled, config):
             "model.window_release act from the release on; [output] and model.kind on nothing)"
         )
     return config
-
-
-class _Restart(Exception):
-    """Raised from the step callback to leave the time stepping: after a window move (to step
-    on with the new hybrid) or once deployed."""
 
 
 class HybridDeployment:
@@ -360,18 +363,10 @@ class HybridDeployment:
 
     # -- stepping -------------------------------------------------------------------------------
     def step_error(self) -> float:
-        """The step's local error in the displacement over its tolerance, the shell's and the
-        beam's translations together (as the full shell's; collective; before the advance)."""
-        tol = self.config.deployment.error_tolerance
-        sums = np.zeros(3)
-        for scheme, dofs in self._translations():
-            error = scheme.local_error()[dofs]
-            increment = scheme.q.x.array[dofs] - scheme.q_old.x.array[dofs]
-            sums += [error @ error, increment @ increment, dofs.size]
-        sums = self.comm.allreduce(sums)
-        count = max(sums[2], 1.0)
-        rms_error, rms_increment = np.sqrt(sums[0] / count), np.sqrt(sums[1] / count)
-        return float(rms_error / (tol * (rms_increment + self.config.tape.h)))
+        """The step's local error over its tolerance, the shell's and the beam's translations
+        together (:func:`~tapecoil.phases.time_loop.step_error`; collective; before the advance)."""
+        cfg = self.config
+        return step_error(self._translations(), cfg.deployment.error_tolerance, cfg.tape.h, self.comm)
 
     def _translations(self):
         """(scheme, owned translational dofs) of the shell and the beam."""
@@ -480,20 +475,11 @@ class HybridDeployment:
         ("t_end"); ``on_step(record)`` after each converged step. Raises
         :class:`~tapecoil.core.stepping.ContinuationError` when a step does not converge even cut
         back, the last converged state kept."""
-        cfg = self.config
-        d = cfg.deployment
+        d = self.config.deployment
         t0 = clock_origin(last_wall_time(self.records) if self._resumed else 0.0)
-        smallest = smallest_time_step(d.t_end, d.dt)
         legs = time_legs(d.release_time, d.t_end, d.dt, d.max_dt)
         if len(legs) == 1 and self.hold is not None:  # no release leg: the end let go at once
             self.hold.release(0.0)
-        if self._resumed and self.records:
-            # what the stopped run did after its last step: stop there, or move the window
-            self._resumed = False
-            try:
-                self._after_step(self.records[-1])
-            except _Restart:
-                pass
 
         def converged(step, end):
             self.time = step.load
@@ -504,20 +490,33 @@ class HybridDeployment:
                 on_step(record)
             self._after_step(record)
 
-        for end, max_dt in legs:
-            while self.time < end * (1 - 1e-12) and self.outcome != "deployed":
-                self._leg(end, max_dt, smallest, converged)
-            if self.outcome == "deployed":
-                break
+        if self._resumed and self.records:
+            # what the stopped run did after its last step: stop there, or move the window
+            self._resumed = False
+            try:
+                self._after_step(self.records[-1])
+            except StepOn:
+                pass
+            except Deployed:
+                return self.outcome
+        try:
+            step_in_time(self.config, legs, self, self._stepper, converged)
+        except Deployed:
+            pass
+        except ContinuationError:
+            if self.free_hub is not None:  # the root back where the last converged step left it
+                self.free_hub.place(self.rotor.angle)
+            raise
         return self.outcome
 
     def _after_step(self, record: DeploymentRecord) -> None:
-        """After a converged step: raise _Restart when the tape is deployed (``outcome``) or the
-        window moved, :class:`CoilLoosening` when the coil has come loose behind it."""
+        """After a converged step: raise :class:`~tapecoil.phases.time_loop.Deployed` when the
+        tape is deployed (``outcome``), :class:`~tapecoil.phases.time_loop.StepOn` when the window
+        moved, :class:`CoilLoosening` when the coil has come loose behind it."""
         cfg = self.config
         if record.deployed >= cfg.deployment.lambda_end:
             self.outcome = "deployed"
-            raise _Restart
+            raise Deployed
         gap, at = self.beam_gap
         if gap > LIFT_OFF_GAP * cfg.tape.h:
             raise CoilLoosening(
@@ -533,56 +532,33 @@ class HybridDeployment:
         start = self._wanted_start(record.coiled_length)
         if start is not None:
             self._move(start)
-            raise _Restart
+            raise StepOn
 
-    def _leg(self, end: float, max_dt: float, smallest: float, converged) -> None:
-        """Step towards the time ``end`` [s] with this window until it moves, the tape is
-        deployed or ``end`` is reached (``converged(step, end)`` after each step)."""
-        cfg = self.config
-        d = cfg.deployment
+    def _stepper(self) -> TimeStepper:
+        """The present window's motion as the time loop steps it."""
         motion = self.motion
         alpha_f = motion.shell_scheme.parameters.alpha_f
 
-        def set_time(target):
-            dt = target - self.time
+        def set_step(dt, target):
             for scheme in motion.schemes:
                 scheme.set_step(dt)
             if self.hold is not None:
                 self.hold.release(target - alpha_f * dt)
 
-        def predict(t_from, t_to):
+        def predict(dt):
             for scheme in motion.schemes:
-                scheme.predict(t_to - t_from)
+                scheme.predict(dt)
             if self.rotor is not None:
-                self.rotor.predict(t_to - t_from)
+                self.rotor.predict(dt)
 
-        span = end - self.time
-        control = cfg.solver.control(
-            initial_step=min(d.dt / span, 1.0),
-            max_step=min(max_dt / span, 1.0),
-            min_step=smallest / span,
-            range_fraction=d.t_end / span,
-        )
-        continuation = Continuation(
-            motion.solver.solve if self.free_hub is None else self.free_hub.solve,
-            set_time,
+        return TimeStepper(
             JointState(self.hybrid.shell.model.q, self.hybrid.beam.model.q),
-            control,
-            predict=predict,
-            error=self.step_error if d.error_tolerance > 0 else None,
+            motion.solver.solve if self.free_hub is None else self.free_hub.solve,
+            set_step,
+            predict,
+            self.step_error,
             commit=lambda: self._commit(motion),
-            easy_iterations=EASY_ITERATIONS,
         )
-        continuation.on_step = lambda step: converged(step, end)
-        first, self.next_step = self.next_step, None
-        try:
-            continuation.run(self.time, end, first_step=first)
-        except _Restart:
-            return
-        except ContinuationError:
-            if self.free_hub is not None:  # the root back where the last converged step left it
-                self.free_hub.place(self.rotor.angle)
-            raise
 
     def destroy(self) -> None:
         self.motion.destroy()

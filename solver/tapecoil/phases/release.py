@@ -26,25 +26,6 @@ class _Magnitude:
     value: np.ndarray
 
 
-def time_legs(release_time: float, t_end: float, dt: float, max_dt: float) -> list[tuple[float, float]]:
-    """A deployment's legs of time stepping, each (its end [s], its largest step [s]): the
-    release, when there is one, then the rest up to ``t_end``."""
-    # the release in steps of at most a twentieth of it: the hold's spring is stiff and its work is
-    # integrated over the steps; then the steps grow to max_dt
-    release = min(release_time, t_end)
-    legs = [(release, min(release / 20, dt))] if release > 0 else []
-    legs.append((t_end, max(max_dt, dt)))
-    return legs
-
-
-def smallest_time_step(t_end: float, dt: float) -> float:
-    """A deployment's smallest time step [s] before it gives up ([solver] min_step = 0), absolute
-    whatever the span left, so that a restart steps as the first run."""
-    # a millionth of the run, but at most a thousandth of the first step: far below any step a
-    # converging deployment takes, so reaching it means the cut-backs have failed
-    return min(1e-6 * t_end, 1e-3 * dt)
-
-
 def split_state(expr):
     """(u, theta) parts of a state-shaped expression of the mixed space (3 + 2 components)."""
     return ufl.as_vector([expr[i] for i in range(3)]), ufl.as_vector([expr[3], expr[4]])
