@@ -221,6 +221,24 @@ def short_deployment(
     return deployment
 
 
+def test_a_step_that_converges_to_more_energy_is_refused():
+    """The coarse 4.5 rad coil deployed through its release, then one step of 0.1 ms: converged,
+    it is accepted; its state pushed off it by a twentieth of every displacement and rotation
+    (the energy far above where the step started), refused, the energy it made named."""
+    deployment = short_deployment(MPI.COMM_WORLD, t_end=0.003)
+    stepper = deployment.stepper()
+    dt = 1e-4
+    stepper.set_step(dt, deployment.time + dt)
+    stepper.predict(dt)
+    assert stepper.solve().converged
+    assert stepper.refusal() is None
+    q = deployment.hybrid.shell.model.q
+    q.x.array[:] *= 1.05
+    q.x.scatter_forward()
+    message = stepper.refusal()
+    assert message is not None and "made energy" in message
+
+
 def test_a_coiled_tape_deploys_only_as_it_was_coiled():
     """A deployment's configuration may differ from its coiling's in what acts from the release
     on ([deployment], model.window_release), and in nothing else: a thicker tape is refused,

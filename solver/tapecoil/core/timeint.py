@@ -111,6 +111,11 @@ class GeneralizedAlpha:
         q, q0, v0, a0 = (f.x.array for f in (self.q, self.q_old, self.v_old, self.a_old))
         return newmark_rates(self.parameters, dt, q, q0, v0, a0)
 
+    def new_rates(self) -> tuple[np.ndarray, np.ndarray]:
+        """The velocity and acceleration (dof arrays) the step in place ends with, as
+        :meth:`advance` will take them (call before it)."""
+        return self._new_rates(float(self.dt.value))
+
     def set_step(self, dt: float) -> None:
         self.dt.value = dt
 

@@ -43,7 +43,9 @@ class HubRotor:
         self.dt = dt
         self.new_angle = self.angle + dt * self.rate
 
-    def _new_rates(self) -> tuple[float, float]:
+    def new_rates(self) -> tuple[float, float]:
+        """The rate [rad/s] and angular acceleration [rad/s^2] the step in place ends with, as
+        :meth:`advance` will take them (call before it)."""
         return newmark_rates(
             self.parameters, self.dt, self.new_angle, self.angle, self.rate, self.acceleration
         )
@@ -51,7 +53,7 @@ class HubRotor:
     def inertia_torque(self) -> float:
         """J a_m [N m]: the hub's inertia at the generalized-alpha level of the step's new angle."""
         p = self.parameters
-        _, a = self._new_rates()
+        _, a = self.new_rates()
         return self.inertia * ((1 - p.alpha_m) * a + p.alpha_m * self.acceleration)
 
     def inertia_stiffness(self) -> float:
@@ -61,7 +63,7 @@ class HubRotor:
 
     def advance(self) -> None:
         """After a converged step: the new angle, rate and acceleration become the old."""
-        self.rate, self.acceleration = self._new_rates()
+        self.rate, self.acceleration = self.new_rates()
         self.angle = self.new_angle
 
     def kinetic_energy(self) -> float:

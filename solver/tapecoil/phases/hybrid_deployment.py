@@ -89,6 +89,7 @@ from tapecoil.phases.time_loop import (
     Deployed,
     StepOn,
     TimeStepper,
+    energy_refusal,
     step_error,
     step_in_time,
     time_legs,
@@ -223,6 +224,8 @@ class HybridDeployment:
         self.moves: list[tuple[float, float, float]] = []
         self.next_step: float | None = None  # the step the stepping tries next
         self.outcome = "t_end"
+        # the tape's energy at the start of the step under way [J] (:meth:`step_refusal`)
+        self._start_energy = 0.0
         self._resumed = restart is not None
         if restart is not None:
             self._restore(restart, tables)
@@ -308,6 +311,8 @@ class HybridDeployment:
         self.moves = [tuple(move) for move in state["moves"]]
         self.placed_settling = list(state["placed_settling"])
         self.records = [DeploymentRecord(**{**r, "window": tuple(r["window"])}) for r in state["records"]]
+        last = self.records[-1]
+        self._start_energy = last.strain_energy + last.contact_energy + last.kinetic_energy
         _, start, end = self.moves[-1]
         self.hybrid = self.coiling.build(start, f"hybrid_deploy{len(self.moves) - 1}", released=True, end=end)
         self.hybrid.set_state(tables)
@@ -368,6 +373,31 @@ class HybridDeployment:
         cfg = self.config
         return step_error(self._translations(), cfg.deployment.error_tolerance, cfg.tape.h, self.comm)
 
+    def step_refusal(self) -> str | None:
+        """Why a converged step is not accepted for the energy it made
+        (:func:`~tapecoil.phases.time_loop.energy_refusal`), None if it is: the strain, contact
+        and kinetic energy of shell, beam and a free hub at the step's end, its rates as the
+        schemes will take them, against the step's start less the loads' work over the step
+        (collective; before the step is committed)."""
+        records, motion, m = self.records, self.motion, self.measures
+        if not records:  # no record of the release yet: nothing to compare with
+            return None
+        saved = [scheme.v_old.x.array.copy() for scheme in motion.schemes]
+        try:
+            for scheme in motion.schemes:
+                scheme.v_old.x.array[:] = scheme.new_rates()[0]
+            kinetic = m.kinetic_energy()
+        finally:
+            for scheme, v in zip(motion.schemes, saved, strict=True):
+                scheme.v_old.x.array[:] = v
+        if self.rotor is not None:
+            kinetic += 0.5 * self.rotor.inertia * self.rotor.new_rates()[0] ** 2
+        after = m.strain_energy() + m.contact_energy() + kinetic
+        work = (0.0 if self.hold is None else self.hold.work()) + motion.weight_work()
+        first = records[0]
+        stowed = first.strain_energy + first.contact_energy + first.kinetic_energy
+        return energy_refusal(self._start_energy, after, work, stowed)
+
     def _translations(self):
         """(scheme, owned translational dofs) of the shell and the beam."""
         shell, beam = self.hybrid.shell, self.hybrid.beam.model
@@ -410,6 +440,8 @@ class HybridDeployment:
         self.motion = self._motion(new, release=False)
         self.motion.set_rates(new_rates)
         after = self.measures.energies()
+        hub_kinetic = 0.0 if self.rotor is None else self.rotor.kinetic_energy()
+        self._start_energy = sum(after.values()) + hub_kinetic
         self.placed_settling.append(
             {
                 **settling,
@@ -449,15 +481,17 @@ class HybridDeployment:
         hub_kinetic = 0.0 if rotor is None else rotor.kinetic_energy()
         reading = m.lift_off()
         self.beam_gap = (reading["beam_gap"], reading["beam_gap_at"])
+        strain, contact, kinetic = m.strain_energy(), m.contact_energy(), m.kinetic_energy() + hub_kinetic
+        self._start_energy = strain + contact + kinetic  # the next step's start
         return DeploymentRecord(
             self.time,
             0.0 if step is None else float(step.step),
             reading["lambda"],
             reading["coiled_length"],
             self.window(),
-            m.strain_energy(),
-            m.contact_energy(),
-            m.kinetic_energy() + hub_kinetic,
+            strain,
+            contact,
+            kinetic,
             self.external_work,
             0 if step is None else int(step.iterations),
             0 if step is None else int(step.cutbacks),
@@ -500,7 +534,7 @@ class HybridDeployment:
             except Deployed:
                 return self.outcome
         try:
-            step_in_time(self.config, legs, self, self._stepper, converged)
+            step_in_time(self.config, legs, self, self.stepper, converged)
         except Deployed:
             pass
         except ContinuationError:
@@ -534,7 +568,7 @@ class HybridDeployment:
             self._move(start)
             raise StepOn
 
-    def _stepper(self) -> TimeStepper:
+    def stepper(self) -> TimeStepper:
         """The present window's motion as the time loop steps it."""
         motion = self.motion
         alpha_f = motion.shell_scheme.parameters.alpha_f
@@ -557,6 +591,7 @@ class HybridDeployment:
             set_step,
             predict,
             self.step_error,
+            self.step_refusal,
             commit=lambda: self._commit(motion),
         )
 

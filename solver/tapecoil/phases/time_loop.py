@@ -52,6 +52,27 @@ class TimeStepper:
     commit: Callable[[], None] | None = None
 
 
+# a converged step may end with more energy than it started with by no more than this share of
+# the stowed energy. The scheme dissipates, but a step's energy also moves with the penalty
+# contact's and the ties' stiff springs by a part in a thousand or so; a step that makes a
+# hundredth of all the tape holds, half of what a whole run may dissipate, is no motion of the
+# tape: its Newton solve has converged to a spurious root
+ENERGY_GROWTH = 1e-2
+
+
+def energy_refusal(before: float, after: float, work: float, stowed: float) -> str | None:
+    """Why a converged step is not accepted for the energy it made, None if it is: ``before``
+    and ``after`` the tape's energy (strain, contact, kinetic) at the step's start and end [J],
+    ``work`` the loads' work on it over the step [J], ``stowed`` the energy at release [J]."""
+    growth = after - before - work
+    if growth > ENERGY_GROWTH * stowed:
+        return (
+            f"the step made energy, {growth / stowed:.3g} of the stowed energy (a spurious "
+            "root of the step's equations)"
+        )
+    return None
+
+
 def time_legs(release_time: float, t_end: float, dt: float, max_dt: float) -> list[tuple[float, float]]:
     """A deployment's legs of time stepping, each (its end [s], its largest step [s]): the
     release, when there is one, then the rest up to ``t_end``."""
