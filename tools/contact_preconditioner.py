@@ -120,7 +120,8 @@ def lumped_matrix():
     return M
 
 
-# on more ranks the lumped matrix's assembly crashed (a segmentation fault in PETSc's insertion):
+# on two ranks this tool stopped with a segmentation fault once the lumped matrix was added (not
+# traced):
 # one rank only, as the sectors
 lumped = lumped_matrix() if comm.size == 1 else None
 
