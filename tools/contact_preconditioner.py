@@ -121,8 +121,7 @@ def lumped_matrix():
 
 
 # on two ranks this tool stopped with a segmentation fault once the lumped matrix was added (not
-# traced):
-# one rank only, as the sectors
+# traced): one rank only, as the sectors
 lumped = lumped_matrix() if comm.size == 1 else None
 
 
