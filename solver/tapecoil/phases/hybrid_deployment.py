@@ -26,7 +26,10 @@ The shell and the beam are stepped together by generalized-alpha
 spectral radius, its first and largest steps, the release's steps of at most a twentieth of it,
 growth after easy solves and cut-back after failed ones, and, with ``deployment.error_tolerance``,
 steps sized by their local error (the shell's and the beam's displacements together, as the
-full shell's :meth:`~tapecoil.phases.deployment.DeploymentProblem.step_error`).
+full shell's :meth:`~tapecoil.phases.deployment.DeploymentProblem.step_error`), in the time loop
+both models share (:mod:`tapecoil.phases.time_loop`). A step whose Newton solve converges to
+more energy than the step started with is refused and cut back
+(:meth:`HybridDeployment.step_refusal`).
 
 As the tape unwinds the lift-off point travels towards the root. Once the release is over and
 the lift-off has come within ``window_behind`` of the window's start, the window moves back
