@@ -83,7 +83,7 @@ def test_the_tape_fold_takes_the_settings():
 def coiled():
     """A 0.1 m tape coiled by 0.3 rad with every [solver] key away from its default; the step
     controls the coiling and the deployment built are recorded."""
-    from tapecoil.phases import deployment, deployment_run
+    from tapecoil.phases import deployment, deployment_run, time_loop
     from tapecoil.phases.coiling import CoilingProblem
     from tapecoil.phases.coiling_run import CoilingRun
 
@@ -107,19 +107,19 @@ def coiled():
     run.flatten()
     run.coil(cfg.coiling.hub_angle)
 
-    original = deployment_run.Continuation
+    original = time_loop.Continuation
 
     class RecordedContinuation(original):
         def __init__(self, solve, set_load, state, control, **kw):
             controls.append(("deployment", control))
             super().__init__(solve, set_load, state, control, **kw)
 
-    deployment_run.Continuation = RecordedContinuation
+    time_loop.Continuation = RecordedContinuation
     try:
         deploy = deployment.DeploymentProblem(model.tape, cfg)
         result = deployment_run.DeploymentRun(deploy).run()
     finally:
-        deployment_run.Continuation = original
+        time_loop.Continuation = original
     return cfg, model, run.result.history, deploy, result, controls
 
 
