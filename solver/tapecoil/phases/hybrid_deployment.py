@@ -150,6 +150,11 @@ class DeploymentRecord:
     hub_rate: float
     hub_kinetic_energy: float
 
+    @property
+    def energy(self) -> float:
+        """The strain, contact and kinetic energy [J] (a free hub's in the kinetic)."""
+        return self.strain_energy + self.contact_energy + self.kinetic_energy
+
 
 class CoilLoosening(ContinuationError):
     """The coil loosens behind the window: a stretch of the flattened beam has lifted off its
@@ -314,8 +319,7 @@ class HybridDeployment:
         self.moves = [tuple(move) for move in state["moves"]]
         self.placed_settling = list(state["placed_settling"])
         self.records = [DeploymentRecord(**{**r, "window": tuple(r["window"])}) for r in state["records"]]
-        last = self.records[-1]
-        self._start_energy = last.strain_energy + last.contact_energy + last.kinetic_energy
+        self._start_energy = self.records[-1].energy
         _, start, end = self.moves[-1]
         self.hybrid = self.coiling.build(start, f"hybrid_deploy{len(self.moves) - 1}", released=True, end=end)
         self.hybrid.set_state(tables)
@@ -397,9 +401,7 @@ class HybridDeployment:
             kinetic += 0.5 * self.rotor.inertia * self.rotor.new_rates()[0] ** 2
         after = m.strain_energy() + m.contact_energy() + kinetic
         work = (0.0 if self.hold is None else self.hold.work()) + motion.weight_work()
-        first = records[0]
-        stowed = first.strain_energy + first.contact_energy + first.kinetic_energy
-        return energy_refusal(self._start_energy, after, work, stowed)
+        return energy_refusal(self._start_energy, after, work, records[0].energy)
 
     def _translations(self):
         """(scheme, owned translational dofs) of the shell and the beam."""
@@ -484,17 +486,15 @@ class HybridDeployment:
         hub_kinetic = 0.0 if rotor is None else rotor.kinetic_energy()
         reading = m.lift_off()
         self.beam_gap = (reading["beam_gap"], reading["beam_gap_at"])
-        strain, contact, kinetic = m.strain_energy(), m.contact_energy(), m.kinetic_energy() + hub_kinetic
-        self._start_energy = strain + contact + kinetic  # the next step's start
-        return DeploymentRecord(
+        record = DeploymentRecord(
             self.time,
             0.0 if step is None else float(step.step),
             reading["lambda"],
             reading["coiled_length"],
             self.window(),
-            strain,
-            contact,
-            kinetic,
+            m.strain_energy(),
+            m.contact_energy(),
+            m.kinetic_energy() + hub_kinetic,
             self.external_work,
             0 if step is None else int(step.iterations),
             0 if step is None else int(step.cutbacks),
@@ -506,6 +506,8 @@ class HybridDeployment:
             0.0 if rotor is None else rotor.rate,
             hub_kinetic,
         )
+        self._start_energy = record.energy  # the next step's start
+        return record
 
     def run(self, on_step=None) -> str:
         """Release and step to ``deployment.lambda_end`` (returns "deployed") or ``t_end``

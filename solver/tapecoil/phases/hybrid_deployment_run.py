@@ -118,7 +118,7 @@ class HybridDeploymentPhase(Phase):
         )
 
     def _row(self, record: DeploymentRecord) -> dict:
-        total = record.strain_energy + record.contact_energy + record.kinetic_energy
+        total = record.energy
         if not self.history:
             self._stowed_energy = total
         return {
