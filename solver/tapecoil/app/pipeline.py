@@ -46,12 +46,15 @@ def run(
     ``summary["interrupted"]`` set. ``report``: make the pictures and report.html (default:
     ``output.report``; rank 0, after the computation).
     """
-    from tapecoil.config.model import hybrid_deployment_need
+    from tapecoil.config.model import frictionless_need, hybrid_deployment_need
     from tapecoil.config.params import ConfigError
     from tapecoil.phases.models import for_config
 
     if "deployment" in phases and "payout" in phases:
         raise ValueError("a run deploys the stowed tape or pays it out, not both")
+    need = frictionless_need(config, phases)
+    if need is not None:
+        raise ConfigError(need)
     if "deployment" in phases:
         need = hybrid_deployment_need(config)
         if need is not None:

@@ -98,6 +98,11 @@ def _coiling_needs(config) -> tuple:
             "mesh.grading = 1",
             "its shell and beams share their nodes along the tape",
         ),
+        (
+            config.contact.hub_friction == 0.0,
+            "contact.hub_friction = 0",
+            "its window and beams rest on the hub without friction",
+        ),
     )
 
 
@@ -120,6 +125,19 @@ def hybrid_need(config) -> str | None:
         "it deploys by generalized-alpha (the energy-conserving scheme is the full shell's)",
     )
     return _first_unmet((*_coiling_needs(config), deploying))
+
+
+def frictionless_need(config, phases) -> str | None:
+    """Why ``phases`` (names: "coiling", "deployment", "payout") cannot run the tape of
+    ``config`` as configured, or None: the hub's friction acts in the coiling alone."""
+    moving = [phase for phase in ("deployment", "payout") if phase in phases]
+    if config.contact.hub_friction == 0.0 or not moving:
+        return None
+    return (
+        f"contact.hub_friction = {config.contact.hub_friction:g} acts in the coiling alone; the "
+        f"{' and the '.join(moving)} take the hub frictionless: set contact.hub_friction = 0 for "
+        "them (a coil wound with friction deploys from its checkpoint with tapecoil deploy)"
+    )
 
 
 def hybrid_deployment_need(config) -> str | None:

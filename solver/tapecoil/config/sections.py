@@ -252,6 +252,11 @@ class ContactConfig:
             thickness h [-], > 0: candidate partners within h (1 + search_margin) are kept, and
             the search is repeated only when a point has moved more than search_margin h / 2
             since the last search.
+        hub_friction: Coulomb friction coefficient between the tape's face and the hub [-], in
+            [0, 2]: each point pressed on the hub sticks to it until its traction reaches
+            hub_friction times its pressure, then slips (a return mapping, tangential stiffness
+            the normal penalty's; :mod:`tapecoil.hub.friction`); 0 frictionless. The full
+            shell's coiling (tapecoil coil); the deployment and the payout are frictionless.
     """
 
     turns: str = param("spiral", "", ("spiral", "surface"))
@@ -260,6 +265,7 @@ class ContactConfig:
     smoothing: float = param(0.05, "-", Range(0.0, 1.0))
     stop_penetration: float = param(1.0, "-", Range(0.0, 100.0, lo_open=True))
     search_margin: float = param(2.0, "-", POSITIVE)
+    hub_friction: float = param(0.0, "-", Range(0.0, 2.0))
 
 
 @dataclass
@@ -388,6 +394,11 @@ class Config:
             raise ConfigError(
                 f"hub.inertia = {self.hub.inertia:g} kg m^2 acts only on a hub free to turn: set "
                 "deployment.hub = 'free', or leave hub.inertia out for a fixed hub"
+            )
+        if self.solver.stability and self.contact.hub_friction > 0:
+            raise ConfigError(
+                f"solver.stability = true judges a tangent stiffness that has a potential, and "
+                f"contact.hub_friction = {self.contact.hub_friction:g} has none: leave one of them out"
             )
         self.check_laminate()
         self.check_coiling()

@@ -48,19 +48,27 @@ def function_field(function) -> CellField:
     )
 
 
-def _owned_cells(mesh) -> tuple[int, np.ndarray]:
+def _owned_cells(mesh, numbering: str = "input") -> tuple[int, np.ndarray]:
     tdim = mesh.topology.dim
     index_map = mesh.topology.index_map(tdim)
     owned = index_map.size_local
+    if numbering == "global":
+        return index_map.size_global, np.arange(*index_map.local_range, dtype=np.int64)
+    if numbering != "input":
+        raise ValueError(f"cells are numbered 'input' or 'global', got {numbering!r}")
     return index_map.size_global, np.asarray(mesh.topology.original_cell_index[:owned], dtype=np.int64)
 
 
-def gather_fields(fields: dict[str, CellField], comm) -> dict[str, np.ndarray]:
+def gather_fields(fields: dict[str, CellField], comm, numbering: str = "input") -> dict[str, np.ndarray]:
     """Each field's values as (global cells, dofs per cell, components) in the cells' input
-    order, on rank 0 (empty dict elsewhere; collective)."""
+    order, on rank 0 (empty dict elsewhere; collective).
+
+    ``numbering="global"``: in the order of the cells' global indices instead, the order in
+    which adios4dolfinx writes a mesh, so that the mesh read back from that checkpoint, whose
+    input order is the file's, takes them back with :func:`scatter_fields`."""
     out = {}
     for name, field in fields.items():
-        size, original = _owned_cells(field.mesh)
+        size, original = _owned_cells(field.mesh, numbering)
         table = field.values[field.dofs[: len(original)]]
         pieces = comm.gather((original, table), root=0)
         if comm.rank == 0:

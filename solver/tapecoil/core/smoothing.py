@@ -31,3 +31,16 @@ def penetration_ufl(gap, delta: float):
         x = gap / delta
         return delta * (ufl.max_value(x, 0.0) + ufl.ln(1.0 + ufl.exp(-abs(x))))
     return ufl.max_value(gap, 0.0)
+
+
+def penetration_slope_ufl(gap, delta: float):
+    """The slope d<gap>/d(gap) of :func:`penetration_ufl` (UFL): the step 0/1, or, with
+    ``delta`` > 0, the logistic function of gap / delta, written to be stable for either sign.
+    A penalty k <g>^2 / 2 pushes with k <g> times this slope."""
+    import ufl
+
+    if delta > 0.0:
+        x = gap / delta
+        below, above = ufl.exp(ufl.min_value(x, 0.0)), ufl.exp(-ufl.max_value(x, 0.0))
+        return below / (below + above)
+    return ufl.conditional(ufl.gt(gap, 0.0), 1.0, 0.0)

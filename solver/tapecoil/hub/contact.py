@@ -51,7 +51,7 @@ import dolfinx
 import numpy as np
 import ufl
 
-from tapecoil.core.smoothing import penetration_ufl, smoothstep, smoothstep_ufl
+from tapecoil.core.smoothing import penetration_slope_ufl, penetration_ufl, smoothstep, smoothstep_ufl
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, Nodes
 
@@ -120,7 +120,9 @@ class CoilContact:
     """Contact of the tape's inner face with the hub (penalty), and the winding angles.
 
     ``frame`` places the hub and gives its radius; ``max_turns`` bounds the number of turns of
-    the ideal spiral; ``ramp_width`` [rad] is its climb w (see the module docstring).
+    the ideal spiral; ``ramp_width`` [rad] is its climb w (see the module docstring);
+    ``fairing``: in the surface mode, the fairing behind a root clamped on the hub (False: a
+    bare cylinder, for a tape that is not clamped to it).
     """
 
     def __init__(
@@ -132,6 +134,7 @@ class CoilContact:
         ramp_width: float,
         smoothing: float = 0.0,
         turns: str = "spiral",
+        fairing: bool = True,
     ):
         self.model = model
         self.frame = frame
@@ -150,16 +153,21 @@ class CoilContact:
         self.psi = dolfinx.fem.Function(self.nodes.space, name="winding_angle")
 
         self.smoothing = smoothing
-        face = self._face(model.phi, model.d)
+        # the face's point relative to the axis (UFL): what the hub touches
+        self.face = face = self._face(model.phi, model.d)
         self.radius = ufl.sqrt(face[0] ** 2 + face[2] ** 2)
         if turns not in TURN_MODELS:
             raise ValueError(f"contact between turns must be one of {TURN_MODELS}, got {turns!r}")
         self.turns = turns
+        self.fairing = fairing and turns == "surface"
         self.hub_turn = dolfinx.fem.Constant(model.mesh, 0.0)
         if turns == "spiral":
             self.obstacle = spiral_obstacle(self.psi, r_hub, h, max_turns, ramp_width)
             # the hub carries the first turn up to the start of its climb; beyond, turns carry turns
             on_hub = ufl.conditional(ufl.lt(self.psi, 2 * math.pi - ramp_width), 1.0, 0.0)
+        elif not fairing:  # a bare cylinder: no root is clamped on it
+            self.obstacle = r_hub
+            on_hub = 1.0
         else:
             # the hub's fairing behind the root clamp (see fairing_height), turned with the hub
             swept = frame.sign * ufl.atan2(face[2], face[0]) - 0.5 * math.pi - self.hub_turn
@@ -169,9 +177,14 @@ class CoilContact:
                 1.0 - behind / ramp_width
             )
             on_hub = 1.0
-        self.penetration = self._bracket(self.obstacle - self.radius)
+        gap = self.obstacle - self.radius
+        self.penetration = self._bracket(gap)
+        # the push of the hub on the face per unit reference area [N/m^2]: the energy's slope in g
+        self.pressure = self.stiffness * self.penetration * penetration_slope_ufl(gap, smoothing)
         density = 0.5 * self.stiffness * self.penetration**2 * model.jacobian
         self.energy = density * model.dx
+        # what the hub itself pushes (the spiral's turns carry the rest): what its friction bounds
+        self.hub_pressure = on_hub * self.pressure
         self.energy_hub = on_hub * density * model.dx
         self.energy_coil = (1.0 - on_hub) * density * model.dx if turns == "spiral" else None
         self.hub_angle = 0.0
@@ -247,6 +260,8 @@ class CoilContact:
         hub's clamp does: the end of the first turn climbs it onto the root instead of onto a
         step of height h, which a mesh coarser than h cannot follow.
         """
+        if not self.fairing:
+            return np.zeros_like(swept)
         behind = np.angle(np.exp(1j * (swept - float(self.hub_turn.value))))
         on = (behind > 1e-6 * self.ramp_width) & (behind < self.ramp_width)
         return np.where(on, self.h * smoothstep(1.0 - behind / self.ramp_width), 0.0)

@@ -253,9 +253,14 @@ class ShellProblem:
 
         t0 = time.perf_counter()
         try:
-            return Continuation(solver.solve, self.set_load, self.model.q, control, on_step=on_step).run(
-                0.0, load, stops
-            )
+            return Continuation(
+                solver.solve,
+                self.set_load,
+                self.model.q,
+                control,
+                on_step=on_step,
+                commit=lambda: self.commit(float(self.load.value)),
+            ).run(0.0, load, stops)
         finally:
             self.wall_time = time.perf_counter() - t0
             self.timings = dict(solver.timings)

@@ -146,10 +146,14 @@ class CoilingProblem:
         self.viscosity, self.previous, viscous = model.relaxation(length_scale=self.element_length)
         potential = self.energy - self.pull_work
         self.residual_form = ufl.derivative(potential, model.q, model.dq)
+        friction = tape.friction_residual()
+        if friction is not None:
+            self.residual_form = self.residual_form + friction
         F = self.residual_form + viscous
-        # the Jacobian is the Hessian of a potential (the pull is a dead load, contact a
-        # penalty energy, the relaxation a symmetric viscosity) and the boundary conditions keep
-        # it symmetric: MUMPS LDL^T instead of LU, a faster factorisation with the same results
+        # without friction the Jacobian is the Hessian of a potential (the pull is a dead load,
+        # contact a penalty energy, the relaxation a symmetric viscosity) and the boundary
+        # conditions keep it symmetric: MUMPS LDL^T instead of LU, a faster factorisation with
+        # the same results (the tape's solver options ask for LU where it is not)
         self.solver = SNESSolver.from_config(
             F,
             model.jacobian_form(F),
@@ -206,9 +210,10 @@ class CoilingProblem:
 
         The reaction on each attached dof times the rate at which the hub's turning moves it,
         d q_root / d hub angle (central differences of the attachment), summed: the virtual
-        work of the reactions in a turn of the hub. The hub contact is frictionless and its
-        pressure passes through the axis, so it adds none. Independent of the energy balance
-        of the steps (the history's hub_torque).
+        work of the reactions in a turn of the hub; plus, with friction on the hub, the torque
+        of its traction (:meth:`~tapecoil.hub.friction.HubFriction.hub_torque`). The hub's
+        pressure passes through the axis and adds none. Independent of the energy balance of
+        the steps (the history's hub_torque).
         """
         f = self.internal_force() if internal_force is None else internal_force
         angle = self.root.angle
@@ -222,7 +227,8 @@ class CoilingProblem:
         self.root.set(1.0, angle)
         dofs = owned_constrained_dofs(self.model.W, self.root.bcs)
         rate = (shifted[0][dofs] - shifted[1][dofs]) / (2 * eps)
-        return float(self.comm.allreduce(float(np.dot(f[dofs], rate)), op=MPI.SUM))
+        root = float(self.comm.allreduce(float(np.dot(f[dofs], rate)), op=MPI.SUM))
+        return root + (self.tape.friction.hub_torque() if self.tape.friction is not None else 0.0)
 
     def edge_forces(self, internal_force: np.ndarray | None = None) -> dict[str, float]:
         """Forces at the two ends from one assembly of the internal force [N] (collective).

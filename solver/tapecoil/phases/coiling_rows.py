@@ -41,10 +41,11 @@ class CoilingRows:
         forces = m.edge_forces(internal)
         tension, root_tension = forces["tension"], forces["root_tension"]
         # hub torque from the energy balance of the step: work of the hub = change of stored
-        # energy + work against the pull (secant over the step). The applied pull, not the
-        # measured one: its small noise times the whole slide would swamp a short step
+        # energy (the hub friction's springs too) + what its slip dissipated + work against the
+        # pull (secant over the step). The applied pull, not the measured one: its small noise
+        # times the whole slide would swamp a short step
         pull = float(m.tension.value)
-        potential = e["strain"] + e["contact"] - pull * slide
+        potential = e["strain"] + e["contact"] + e["friction"] + e["friction_dissipated"] - pull * slide
         # undefined (an empty cell) for the first step and across a snap passed by relaxation,
         # where stored energy is released without work of the hub
         torque = ""
@@ -76,6 +77,8 @@ class CoilingRows:
             "strain_energy": e["strain"],
             "contact_energy_hub": e["contact_hub"],
             "contact_energy_coil": e["contact_coil"],
+            "friction_energy": e["friction"],
+            "friction_dissipated": e["friction_dissipated"],
             "max_penetration": m.tape.max_penetration(),
             "coiled_length": geometry["coiled_length"],
             "outer_radius": geometry["outer_radius"],

@@ -21,6 +21,7 @@ from tapecoil.config import Config
 from tapecoil.contact.surface import ShellSurface
 from tapecoil.contact.term import SOLVER_OPTIONS
 from tapecoil.core import checkpoint
+from tapecoil.core.cell_state import function_field, gather_fields, scatter_fields
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import assemble_into, global_scalar
 from tapecoil.geometry.meshes import ROOT, MeshResolution, StripMesh, create_strip_mesh
@@ -29,6 +30,7 @@ from tapecoil.geometry.surfaces import StripGeometry
 from tapecoil.hub.attachment import HubRoot
 from tapecoil.hub.contact import CoilContact, ContactSettings
 from tapecoil.hub.frame import HubFrame
+from tapecoil.hub.friction import HubFriction
 from tapecoil.measures import centre_line as centre
 from tapecoil.models.edges import owned_edge_dofs
 from tapecoil.models.shell import NaghdiShell, shell_material
@@ -68,6 +70,12 @@ class TapeOnHub:
             model, self.frame, cs.penalty, cs.max_turns, cs.ramp_width, cs.smoothing, cs.turns
         )
         self.contact.reset()
+        # Coulomb friction on the hub (contact.hub_friction): a force of no energy, its anchors
+        # on the hub where the tape's face is now
+        mu = config.contact.hub_friction
+        self.friction = HubFriction(self.contact, mu) if mu > 0 else None
+        if self.friction is not None:
+            self.friction.reset()
         self.turns = None
         if cs.turns == "surface":
             self.turns = TurnContact(
@@ -98,6 +106,10 @@ class TapeOnHub:
         out.update(self._contact_parts())
         out["strain"] = out["membrane"] + out["bending"] + out["shear"]
         out["contact"] = out["contact_hub"] + out["contact_coil"]
+        # what the hub's friction holds in its sticking springs, and what its slip has dissipated
+        friction = self.friction
+        out["friction"] = friction.spring_energy() if friction is not None else 0.0
+        out["friction_dissipated"] = friction.dissipated if friction is not None else 0.0
         return out
 
     def _contact_parts(self) -> dict[str, float]:
@@ -155,11 +167,15 @@ class TapeOnHub:
     def internal_force(self, energy=None) -> np.ndarray:
         """The internal force dE/dq at the current state, local array of W (collective): E the
         tape's strain and hub contact (``energy``: a phase's own, with its obstacles), plus the
-        turns' real contact. What the root's attachment and the free end's guide balance."""
+        hub's friction and the turns' real contact. What the root's attachment and the free
+        end's guide balance."""
         energy = self.energy if energy is None else energy
         cached = self._internal.get(id(energy))
         if cached is None:  # the energy is kept with its form, so that its id stays its own
-            form = dolfinx.fem.form(ufl.derivative(energy, self.model.q, self.model.dq))
+            force = ufl.derivative(energy, self.model.q, self.model.dq)
+            if self.friction is not None:
+                force = force + self.friction.residual
+            form = dolfinx.fem.form(force)
             cached = self._internal[id(energy)] = (energy, form, dolfinx.fem.Function(self.model.W))
         _, form, vector = cached
         assemble_into(vector, form)
@@ -181,13 +197,25 @@ class TapeOnHub:
             self.turns.add_force(force)
 
     def accept_state(self) -> None:
-        """After a converged step: the turns' real contact reads its sides from this state."""
+        """After a converged step: the turns' real contact reads its sides from this state, and
+        the hub's friction moves its anchors by the step's slip (on a state already accepted,
+        a restored one, both leave things as they are)."""
         if self.turns is not None:
             self.turns.accept()
+        if self.friction is not None:
+            self.friction.commit()
+
+    def friction_residual(self):
+        """The hub friction's virtual work (UFL form; None without friction): a phase's
+        residual adds it to the derivative of its energy."""
+        return None if self.friction is None else self.friction.residual
 
     def solver_options(self) -> dict:
-        """PETSc options a solver with this tape's contact terms needs (names without prefix)."""
-        return {} if self.turns is None else dict(SOLVER_OPTIONS)
+        """PETSc options a solver with this tape's contact terms needs (names without prefix):
+        friction, like the turns' real contact, makes the Jacobian unsymmetric (LU)."""
+        if self.turns is not None:
+            return dict(SOLVER_OPTIONS)
+        return {} if self.friction is None else {"pc_type": "lu"}
 
     def contact_terms(self, q, bcs, weight: float = 1.0, previous=None) -> list:
         """The solver terms of the turns' real contact (:meth:`TurnContact.term`), if any."""
@@ -211,6 +239,12 @@ class TapeOnHub:
         functions = {**self.checkpoint_functions(), **(extra or {})}
         res = self.strip.resolution
         meta = {**meta, "resolution": {"across": res.across, "along": res.along, "grading": res.grading}}
+        if self.friction is not None:
+            # the anchors live at quadrature points, which adios4dolfinx does not write: cell by
+            # cell in the order it writes the mesh, so that the mesh read back takes them back
+            field = {"friction_anchor": function_field(self.friction.anchor)}
+            tables = {**(tables or {}), **gather_fields(field, self.comm, numbering="global")}
+            meta["friction_dissipated"] = self.friction.dissipated
         tags = {"facets": self.strip.facet_tags, "cells": self.strip.cell_tags}
         checkpoint.write_checkpoint(path, self.strip.mesh, tags, functions, meta, self.comm, tables)
 
@@ -230,6 +264,14 @@ class TapeOnHub:
         checkpoint.read_functions(path, {**parts, "winding_angle": tape.contact.psi})
         checkpoint.set_state(tape.model.q, parts, "")
         tape.accept_state()
+        if tape.friction is not None:
+            # the checkpoint's anchors; a coil wound without friction starts it from here
+            tables = checkpoint.read_tables(path) or {}
+            if "friction_anchor" in tables:
+                scatter_fields({"friction_anchor": function_field(tape.friction.anchor)}, tables)
+                tape.friction.dissipated = meta.get("friction_dissipated", 0.0)
+            else:
+                tape.friction.reset()
         tape.contact.hub_angle = meta["hub_angle"]
         tape.root.set(1.0, meta["hub_angle"])
         tape.contact.turn(meta["hub_angle"])

@@ -25,6 +25,7 @@ CASES = (
     "roof-snap-through",
     "roof-snap-back",
     "tape-moment-rotation",
+    "capstan",
 )
 
 

@@ -21,6 +21,7 @@ from tapecoil.verification.beam import (
     beam_rollup,
     beam_turns,
 )
+from tapecoil.verification.capstan import capstan_grid
 from tapecoil.verification.checks import CaseResult
 from tapecoil.verification.hybrid import CANTILEVER_LENGTH, hybrid_cantilever, hybrid_fold, hybrid_window
 from tapecoil.verification.hybrid_coil import hybrid_coil
@@ -74,6 +75,8 @@ def run_case(name: str, config: Config, preset: str | None = None, comm=MPI.COMM
         result = roof(12.7, ROOF_MESHES[preset], comm=comm, solver_config=config.solver)
     elif name == "roof-snap-back":
         result = roof(6.35, ROOF_MESHES[preset], comm=comm, solver_config=config.solver)
+    elif name == "capstan":
+        result = capstan_grid(comm, solver_config=config.solver)  # on meshes of its own
     elif name == "tape-moment-rotation":
         result = tape_moment_rotation(config, preset, comm)  # on meshes of its own (FOLD_MESHES)
     elif name == "beam-rollup":
