@@ -145,16 +145,10 @@ def _friction_tape(hub_angle: float, mu: float = 0.18):
     """The short coarse tape of the coiling tests with friction ``mu`` on the hub."""
     import dataclasses
 
-    from tapecoil.config import CoilingConfig, Config, ContactConfig, TapeConfig
+    from test_coiling import short_tape
 
-    cfg = Config()
-    return dataclasses.replace(
-        cfg,
-        tape=dataclasses.replace(TapeConfig(), L=0.12),
-        coiling=dataclasses.replace(CoilingConfig(), hub_angle=hub_angle),
-        mesh=dataclasses.replace(cfg.mesh, preset="coarse"),
-        contact=dataclasses.replace(ContactConfig(), hub_friction=mu),
-    )
+    config = short_tape(hub_angle)
+    return dataclasses.replace(config, contact=dataclasses.replace(config.contact, hub_friction=mu))
 
 
 def test_coiling_with_hub_friction_balances_the_work_of_the_hub(tmp_path):
