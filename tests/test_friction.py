@@ -138,6 +138,13 @@ def test_capstan_on_two_ranks_as_on_one():
     assert parallel.checks[0].computed == pytest.approx(serial.checks[0].computed, rel=1e-6)
     assert parallel.info["dissipated [J]"] == pytest.approx(serial.info["dissipated [J]"], rel=1e-6)
     assert parallel.info["steps"] == serial.info["steps"]
+    pressed = {"hold": 0.0, "press": PRESS, "radius": PLANE_RADIUS}
+    parallel = capstan(0.5, PLANE_WRAP, comm, **pressed)
+    serial = capstan(0.5, PLANE_WRAP, MPI.COMM_SELF, **pressed)
+    assert parallel.checks[0].computed == pytest.approx(serial.checks[0].computed, rel=1e-6)
+    # its slip is the difference of two nearly equal displacements (the grip's and the sticking
+    # springs' reach), each converged to Newton's tolerance: 1e-6 apart measured
+    assert parallel.info["dissipated [J]"] == pytest.approx(serial.info["dissipated [J]"], rel=1e-5)
 
 
 # -- coiling with friction on the hub ----------------------------------------------------------
@@ -250,3 +257,44 @@ def test_coiling_with_friction_on_two_ranks_as_on_one(tmp_path_factory):
     e = read.tape.energies()
     restored = (e["strain"], e["friction"], e["friction_dissipated"], read.tape.friction.hub_torque())
     assert restored == pytest.approx(figures["parallel"], rel=1e-9)
+
+
+# a strip pressed on a cylinder of 1 m (a plane, to first order in its 0.05 rad) and pushed
+PLANE_RADIUS, PLANE_WRAP, PRESS = 1.0, 0.05, 1000.0
+
+
+@pytest.mark.parametrize("mu", [0.1, 0.5])
+def test_pressed_strip_slides_at_mu_times_its_load(mu):
+    result = capstan(mu, PLANE_WRAP, MPI.COMM_SELF, hold=0.0, press=PRESS, radius=PLANE_RADIUS)
+    check = result.checks[0]
+    # q b R_m (exp(mu theta) - 1): mu q b L and the part the curvature adds, mu theta / 2
+    assert check.reference == pytest.approx(
+        mu * PRESS * 0.01 * (PLANE_RADIUS + THICKNESS / 2) * PLANE_WRAP, rel=0.02
+    )
+    assert check.error < 2e-4, (check.computed, check.reference)
+
+
+def test_pressed_strip_dissipates_mu_n_times_its_slip():
+    """Sliding, the friction's work over each step is mu N times the slip on the hub's surface,
+    N the hub's push summed (a consistency check of the return mapping's dissipation)."""
+    mu = 0.3
+    problem = CapstanProblem(mu, PLANE_WRAP, MPI.COMM_SELF, hold=0.0, press=PRESS, radius=PLANE_RADIUS)
+    m = problem.model
+    normal = dolfinx.fem.form(problem.contact.hub_pressure * m.jacobian * m.dx)
+    face_angle = dolfinx.fem.form(problem.friction.angle * m.jacobian * m.dx)
+    area = global_scalar(m.jacobian * m.dx, MPI.COMM_SELF)
+    rows = []
+
+    def on_step(record):
+        angle = global_scalar(face_angle, MPI.COMM_SELF) / area  # the face's mean angle on the hub
+        rows.append((global_scalar(normal, MPI.COMM_SELF), problem.friction.dissipated, angle))
+
+    problem.solve(6e-4, first_step=3e-5, max_step=6e-5, on_step=on_step)
+    normal_force, dissipated, angle = np.array(rows).T
+    slip = -np.diff(angle) * problem.contact.r_hub  # the face's angle falls as it moves along +x
+    sliding = slip > 0.5 * slip.max()
+    assert sliding.sum() >= 5
+    work = np.diff(dissipated)[sliding]
+    np.testing.assert_allclose(work, mu * normal_force[1:][sliding] * slip[sliding], rtol=1e-6)
+    # the push is the press and the pull's tension over the radius: q A (1 + mu theta / 2)
+    assert normal_force[-1] == pytest.approx(PRESS * area * (1 + mu * PLANE_WRAP / 2), rel=1e-3)

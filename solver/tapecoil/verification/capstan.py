@@ -45,6 +45,9 @@ HOLD = 1.0  # [N] the held end's force
 # the verification's grid: friction coefficients [-] and wrap angles [rad] (a quarter to 1.5 turns)
 CAPSTAN_MU = (0.1, 0.18, 0.5)
 CAPSTAN_WRAPS = (math.pi / 2, math.pi, 3 * math.pi)
+# a strip pressed on a cylinder of 1 m over 0.05 rad (a plane, but for a part mu theta / 2 of
+# the pull) by 1 kPa and pushed: (radius [m], wrap [rad], pressure [Pa], mu)
+PRESSED = (1.0, 0.05, 1000.0, 0.5)
 # T_pull / T_hold against exp(mu theta): the criterion's 2 %, well above the thickness's 1e-4
 CAPSTAN_TOLERANCE = 0.02
 # elements along the strip per radian of wrap, and across it
@@ -53,10 +56,22 @@ ELEMENTS_PER_RADIAN, ELEMENTS_ACROSS = 6, 1
 
 class CapstanProblem(ShellProblem):
     """The strip on the cylinder over ``wrap`` [rad] with friction ``mu`` [-]; the load
-    parameter is the pulled end's turn about the axis [rad]."""
+    parameter is the pulled end's turn about the axis [rad]. ``hold``: the held end's force [N];
+    ``press``: a pressure [Pa] pushing the strip towards the axis wherever it is; ``radius``:
+    the cylinder's [m]."""
 
-    def __init__(self, mu: float, wrap: float, comm=MPI.COMM_WORLD, name: str = "capstan"):
-        mid = RADIUS + THICKNESS / 2
+    def __init__(
+        self,
+        mu: float,
+        wrap: float,
+        comm=MPI.COMM_WORLD,
+        name: str = "capstan",
+        *,
+        hold: float = HOLD,
+        press: float = 0.0,
+        radius: float = RADIUS,
+    ):
+        mid = radius + THICKNESS / 2
         surface = MappedSurface(
             lambda xi, ops: (mid * ops.sin(xi[0] / mid), xi[1], mid * (ops.cos(xi[0] / mid) - 1.0)),
             ((0.0, mid * wrap), (-WIDTH / 2, WIDTH / 2)),
@@ -69,8 +84,8 @@ class CapstanProblem(ShellProblem):
             comm=comm,
             name=name,
         )
-        self.mu, self.wrap, self.mid = mu, wrap, mid
-        self.frame = frame = HubFrame(RADIUS, THICKNESS, "opposite")  # the axis at (0, y, -mid)
+        self.mu, self.wrap, self.mid, self.hold, self.press = mu, wrap, mid, hold, press
+        self.frame = frame = HubFrame(radius, THICKNESS, "opposite")  # the axis at (0, y, -mid)
         penalty = default_penalty(YOUNG, THICKNESS, mid * wrap / along)
         self.contact = CoilContact(
             self.model, frame, penalty, 1, 1.0, smoothing=0.05 * THICKNESS, turns="surface", fairing=False
@@ -97,9 +112,15 @@ class CapstanProblem(ShellProblem):
 
     def forms(self) -> tuple:
         m = self.model
-        hold = ufl.as_vector([-HOLD / WIDTH, 0.0, 0.0])  # along -x, the held end's tangent, outwards
+        hold = ufl.as_vector([-self.hold / WIDTH, 0.0, 0.0])  # along -x, the held end's tangent, outwards
         work = ufl.dot(hold, m.u) * self._line_element("xi1_min") * m.ds(self.edge("xi1_min"))
-        F = m.residual(work) + ufl.derivative(self.contact.energy + self.grip_energy, m.q, m.dq)
+        energy = self.contact.energy + self.grip_energy
+        if self.press:
+            # the pressure towards the axis wherever the strip is: the potential q rho, rho the
+            # mid-surface's distance from the axis (a press that stays radial as the strip slides)
+            radial = m.phi - ufl.as_vector(self.frame.axis_point)
+            energy = energy + self.press * ufl.sqrt(radial[0] ** 2 + radial[2] ** 2) * m.jacobian * m.dx
+        F = m.residual(work) + ufl.derivative(energy, m.q, m.dq)
         if self.friction is not None:
             F = F + self.friction.residual
         return F, m.jacobian_form(F)
@@ -122,28 +143,41 @@ def capstan(
     wrap: float,
     comm=MPI.COMM_WORLD,
     *,
+    hold: float = HOLD,
+    press: float = 0.0,
+    radius: float = RADIUS,
     solver_config: SolverConfig | None = None,
     name: str = "capstan",
 ) -> CaseResult:
     """The capstan with friction ``mu`` over the wrap angle ``wrap`` [rad]: the pulled end turned
     until the held end has slid by the thickness, past the sticking springs' reach (mu times the
-    penetration), T_pull / T_hold read there against exp(mu theta)."""
-    problem = CapstanProblem(mu, wrap, comm, name)
-    ratio = math.exp(mu * wrap)
+    penetration), T_pull read there.
+
+    Held by ``hold`` [N] alone, T_pull / T_hold against exp(mu theta). Pressed on the cylinder
+    by ``press`` [Pa] too, every radian carries the normal force T + q b R_m (R_m the
+    mid-surface's radius), so dT/dtheta = mu (T + q b R_m) and T_pull = T_hold exp(mu theta) +
+    q b R_m (exp(mu theta) - 1), against which the pull is checked [N] (on a large radius: a
+    strip pressed on a plane and pushed, mu q b L to first order in the wrap)."""
+    problem = CapstanProblem(mu, wrap, comm, name, hold=hold, press=press, radius=radius)
+    growth = math.exp(mu * wrap)
+    pressing = press * WIDTH * problem.mid  # [N] per radian
+    expected = hold * growth + pressing * (growth - 1.0)
     # the turn that stretches the strip to the full pull, and then slides it by a few thicknesses
-    stretch = HOLD * ratio * problem.mid * wrap / (YOUNG * THICKNESS * WIDTH)
+    stretch = expected * problem.mid * wrap / (YOUNG * THICKNESS * WIDTH)
     end = (stretch + 5 * THICKNESS) / problem.mid
     rows = []
 
     def on_step(record):
         rows.append((record.load, problem.pull(), problem.held_end_slide()))
 
-    # steps of an eighth of the stretch while the slip spreads from the grip, then longer
+    # steps of an eighth of the stretch while the slip spreads from the grip, then longer; a
+    # pressed strip, whose first step also presses it on, from a twentieth of the turn (its
+    # stretch is a few nanometres: a step of that turns the first Newton step into a jump)
     steps = problem.solve(
         end,
-        first_step=stretch / problem.mid / 8,
+        first_step=stretch / problem.mid / 8 if not press else end / 20,
         max_step=end / 10,
-        stops=(stretch / problem.mid,),
+        stops=(stretch / problem.mid,) if not press else (),
         on_step=on_step,
         solver_config=solver_config,
         prefix=solver_prefix(name),
@@ -151,9 +185,14 @@ def capstan(
     _, pulls, slides = np.array(rows).T
     sliding = slides >= THICKNESS
     computed = float(pulls[sliding][0]) if sliding.any() else float("nan")
+    check = (
+        Check("T_pull [N]", computed, expected, CAPSTAN_TOLERANCE)
+        if press
+        else Check("T_pull / T_hold", computed / hold, growth, CAPSTAN_TOLERANCE)
+    )
     return CaseResult(
         name,
-        [Check("T_pull / T_hold", computed / HOLD, ratio, CAPSTAN_TOLERANCE)],
+        [check],
         {
             "mu": mu,
             "wrap [rad]": wrap,
@@ -174,7 +213,8 @@ def capstan_grid(
     comm=MPI.COMM_WORLD, *, solver_config: SolverConfig | None = None, name: str = "capstan"
 ) -> CaseResult:
     """The capstan for every friction coefficient of :data:`CAPSTAN_MU` and wrap angle of
-    :data:`CAPSTAN_WRAPS`: one check each, T_pull / T_hold against exp(mu theta)."""
+    :data:`CAPSTAN_WRAPS`: one check each, T_pull / T_hold against exp(mu theta); and the strip
+    :data:`PRESSED` and pushed, T_pull against q b R_m (exp(mu theta) - 1)."""
     checks, info = [], {}
     for mu in CAPSTAN_MU:
         for wrap in CAPSTAN_WRAPS:
@@ -184,6 +224,14 @@ def capstan_grid(
             check.name = f"T_pull / T_hold ({label})"
             checks.append(check)
             info[label] = {key: case.info[key] for key in ("dofs", "steps", "Newton iterations")}
+    radius, wrap, press, mu = PRESSED
+    case = capstan(
+        mu, wrap, comm, hold=0.0, press=press, radius=radius, solver_config=solver_config, name=name
+    )
+    check = case.checks[0]
+    check.name = f"T_pull [N] (pressed on R = {radius:g} m, mu {mu:g})"
+    checks.append(check)
+    info["pressed"] = {key: case.info[key] for key in ("dofs", "steps", "Newton iterations")}
     info["preset"] = "its own"
     info["mesh"] = f"{ELEMENTS_PER_RADIAN} elements per radian of wrap x {ELEMENTS_ACROSS} across"
     return CaseResult(name, checks, info)
