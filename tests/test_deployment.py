@@ -428,3 +428,45 @@ def test_gravity_is_carried_by_the_root(stowed_short):
     dissipated = np.array([r["dissipated_energy"] for r in h])
     assert dissipated.min() > -1e-3 * stowed and dissipated.max() < 0.02 * stowed
     assert abs(h[-1]["external_work"]) > 0  # gravity has worked on the tape
+
+
+@pytest.mark.parametrize("rho_inf", [0.5, 1.0])
+def test_a_steps_energy_is_read_before_it_is_accepted(stowed_short, rho_inf):
+    """What the step's refusal weighs (:meth:`DeploymentProblem.step_energy`, before the step
+    is accepted) is the energy the accepted state reports, but for the contact energy the
+    winding angles' update adds after it; and no step of a sound run is refused for energy."""
+    from tapecoil.phases.deployment import DeploymentProblem
+    from tapecoil.phases.deployment_run import DeploymentRun
+
+    config = short_stowed_config(t_end=0.003, rho_inf=rho_inf)
+    saved = stowed_short.model.q.x.array.copy(), stowed_short.contact.psi.x.array.copy()
+    angle = stowed_short.tape.root.angle
+    try:
+        model = DeploymentProblem(stowed_short.tape, config)
+        read = model.step_energy
+        latest, pairs = [], []
+
+        def step_energy():
+            latest.append(read())
+            return latest[-1]
+
+        model.step_energy = step_energy
+
+        def on_step(row):
+            if row["step"] > 0:
+                total = row["strain_energy"] + row["contact_energy"] + row["kinetic_energy"]
+                pairs.append((latest[-1], total, row["contact_update_energy"]))
+
+        run = DeploymentRun(model, on_step=on_step)
+        run.run()
+    finally:
+        stowed_short.model.q.x.array[:], stowed_short.contact.psi.x.array[:] = saved
+        stowed_short.tape.root.set(1.0, angle)
+        stowed_short.contact.turn(angle)
+    assert run.result.completed or "t_end" in run.result.message
+    candidate, accepted, update = np.array(pairs).T
+    assert len(pairs) > 10
+    stowed = run.result.history[0]["strain_energy"] + run.result.history[0]["contact_energy"]
+    np.testing.assert_allclose(
+        candidate + np.diff(update, prepend=0.0), accepted, rtol=0, atol=1e-12 * stowed
+    )

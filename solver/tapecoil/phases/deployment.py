@@ -241,6 +241,26 @@ class DeploymentProblem:
         out["kinetic"] = global_scalar(self.kinetic_form, self.model.mesh.comm) + out["hub_kinetic"]
         return out
 
+    def step_energy(self) -> float:
+        """The tape's and the hub's energy (strain, contact, kinetic) at the end of the step
+        just solved, its rates as :meth:`advance` will take them [J] (collective; before it)."""
+        ti = self.integrator
+        saved = ti.v_old.x.array.copy()
+        rate = None if self.scheme != "conserving" else self.forms.director_rate.x.array.copy()
+        try:
+            ti.v_old.x.array[:] = ti.new_rates()[0]
+            if rate is not None:
+                self.forms.advance_director_rate()
+            kinetic = global_scalar(self.kinetic_form, self.comm)
+        finally:
+            ti.v_old.x.array[:] = saved
+            if rate is not None:
+                self.forms.director_rate.x.array[:] = rate
+        if self.rotor is not None:
+            kinetic += 0.5 * self.rotor.inertia * self.rotor.new_rates()[0] ** 2
+        e = self.tape.energies()
+        return e["strain"] + e["contact"] + kinetic
+
     def angular_momentum(self) -> float:
         """Angular momentum about the hub's axis of the tape and the hub [kg m^2/s] (collective;
         from the velocities of the last converged time): a free hub and a released tape keep

@@ -28,7 +28,7 @@ from tapecoil.phases.deployment_rows import DeploymentRows
 from tapecoil.phases.runner import LOG, Phase, run_phase
 from tapecoil.phases.stepped import SteppedRun
 from tapecoil.phases.tape_on_hub import TapeOnHub
-from tapecoil.phases.time_loop import Deployed, TimeStepper, step_in_time, time_legs
+from tapecoil.phases.time_loop import Deployed, TimeStepper, energy_refusal, step_in_time, time_legs
 
 
 @dataclass
@@ -96,9 +96,16 @@ class DeploymentRun(SteppedRun):
             ti.set_step(dt)
             m.hold.release(target - alpha_f * dt)  # the hold at the level of the internal forces
 
-        stepper = TimeStepper(
-            m.model.q, m.solve, set_step, m.predict, m.step_error, m.tape.penetration_refusal
-        )
+        def refusal():
+            # too deep into the hub or the turns, or a spurious root that made energy
+            reason = m.tape.penetration_refusal()
+            if reason is not None:
+                return reason
+            last = self.result.history[-1]
+            start = last["strain_energy"] + last["contact_energy"] + last["kinetic_energy"]
+            return energy_refusal(start, m.step_energy(), m.step_work(), self.rows.stowed_energy)
+
+        stepper = TimeStepper(m.model.q, m.solve, set_step, m.predict, m.step_error, refusal)
 
         def converged(step, end):
             self.rows.add_step_work()
