@@ -129,15 +129,23 @@ def hybrid_need(config) -> str | None:
 
 def frictionless_need(config, phases) -> str | None:
     """Why ``phases`` (names: "coiling", "deployment", "payout") cannot run the tape of
-    ``config`` as configured, or None: the hub's friction acts in the coiling alone."""
-    moving = [phase for phase in ("deployment", "payout") if phase in phases]
-    if config.contact.hub_friction == 0.0 or not moving:
+    ``config`` as configured, or None: the hub's friction acts in the coiling and in a
+    deployment with the hub held."""
+    mu = config.contact.hub_friction
+    if mu == 0.0:
         return None
-    return (
-        f"contact.hub_friction = {config.contact.hub_friction:g} acts in the coiling alone; the "
-        f"{' and the '.join(moving)} take the hub frictionless: set contact.hub_friction = 0 for "
-        "them (a coil wound with friction deploys from its checkpoint with tapecoil deploy)"
-    )
+    if "payout" in phases:
+        return (
+            f"contact.hub_friction = {mu:g} acts in the coiling and in a deployment with the hub held; "
+            "the payout takes the hub frictionless: set contact.hub_friction = 0 for it"
+        )
+    if "deployment" in phases and config.deployment.hub == "free":
+        return (
+            f"contact.hub_friction = {mu:g} acts with the hub held; a hub free to turn "
+            "(deployment.hub = 'free') takes it frictionless: set contact.hub_friction = 0, or "
+            "deployment.hub = 'fixed'"
+        )
+    return None
 
 
 def hybrid_deployment_need(config) -> str | None:

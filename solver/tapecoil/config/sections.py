@@ -256,7 +256,8 @@ class ContactConfig:
             [0, 2]: each point pressed on the hub sticks to it until its traction reaches
             hub_friction times its pressure, then slips (a return mapping, tangential stiffness
             the normal penalty's; :mod:`tapecoil.hub.friction`); 0 frictionless. The full
-            shell's coiling (tapecoil coil); the deployment and the payout are frictionless.
+            shell's coiling and its deployment with the hub held; the payout and a hub free
+            to turn refuse it.
     """
 
     turns: str = param("spiral", "", ("spiral", "surface"))

@@ -68,7 +68,10 @@ class DeploymentProblem:
         self.rho_inf = cfg.deployment.rho_inf if rho_inf is None else rho_inf
         self.integrator = ti = GeneralizedAlpha(model.q, self.rho_inf)
 
-        self.forms = forms = DeploymentForms(model, ti, c.contact, tp)
+        # the hub's friction (contact.hub_friction) at the step's end, in either scheme: it
+        # dissipates, and its return mapping is a backward Euler step
+        friction = c.friction_residual()
+        self.forms = forms = DeploymentForms(model, ti, c.contact, tp, friction=friction)
 
         # the hold on the free end (the guide and the pull of the coiling run), let go over
         # release_time (phases.release)
@@ -82,6 +85,8 @@ class DeploymentProblem:
         self._weight = dolfinx.fem.form(self.weight)
         self._weight_work = dolfinx.fem.form(forms.weight_work(g))
         loads = self.hold.form - self.weight
+        if friction is not None:
+            loads = loads + friction
 
         self.scheme = "conserving" if self.rho_inf == 1.0 else "alpha"
         if self.scheme == "alpha":
@@ -200,7 +205,7 @@ class DeploymentProblem:
         M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(self.forms.mass_at_rest()), bcs=self.bcs)
         M.assemble()
         internal = dolfinx.fem.Function(model.W)
-        assemble_into(internal, dolfinx.fem.form(self.forms.internal))
+        assemble_into(internal, dolfinx.fem.form(self.forms.static))
         self.tape.add_self_contact_force(internal)
         b = internal.x.petsc_vec.copy()
         b.scale(-1.0)
@@ -259,7 +264,7 @@ class DeploymentProblem:
         if self.rotor is not None:
             kinetic += 0.5 * self.rotor.inertia * self.rotor.new_rates()[0] ** 2
         e = self.tape.energies()
-        return e["strain"] + e["contact"] + kinetic
+        return e["strain"] + e["contact"] + e["friction"] + kinetic
 
     def angular_momentum(self) -> float:
         """Angular momentum about the hub's axis of the tape and the hub [kg m^2/s] (collective;

@@ -40,19 +40,25 @@ class DeploymentForms:
     """The equation of motion of the shell ``model`` with its ``contact``, stepped by ``integrator``.
 
     ``energy`` is the potential (strain and contact, unless the caller gives another, with the
-    energy of further bodies) and ``internal`` its derivative, the internal forces;
+    energy of further bodies) and ``internal`` its derivative, the internal forces; ``friction``
+    the hub friction's virtual work (UFL, of the state at the step's end; None: none), which
+    the caller puts among a scheme's loads and which the reaction and the start at rest hold;
     ``translational`` and ``rotary`` the inertia per unit reference area of the ``tape``'s section.
     :meth:`alpha` and :meth:`conserving` give each scheme's residual,
     Jacobian and kinetic energy density, with the ``hold`` of the free end added to the residual.
     """
 
-    def __init__(self, model, integrator: GeneralizedAlpha, contact, tape: TapeConfig, energy=None):
+    def __init__(
+        self, model, integrator: GeneralizedAlpha, contact, tape: TapeConfig, energy=None, friction=None
+    ):
         self.model, self.integrator, self.contact = model, integrator, contact
         rho, h = tape.density, tape.h
         self.translational = rho * h  # kg/m^2
         self.rotary = rho * h**3 / 12  # kg
         self.energy = model.strain_energy + contact.energy if energy is None else energy
         self.internal = ufl.derivative(self.energy, model.q, model.dq)
+        # every force of the tape's state: the internal ones and the hub's friction
+        self.static = self.internal if friction is None else self.internal + friction
         # the conserving scheme's director velocity at the quadrature points (restart state)
         self.director_rate = None
 
@@ -160,7 +166,7 @@ class DeploymentForms:
         """The equation of motion at the converged state t_{n+1}, once the integrator has advanced
         (its velocity and acceleration are those of t_{n+1}): inertia plus internal forces, in the
         direction dq. On the root's dofs, what the attachment holds: the reaction."""
-        return self.inertia_at_end() + self.internal
+        return self.inertia_at_end() + self.static
 
     def inertia_at_end(self):
         """The inertia forces at t_{n+1} (the integrator advanced), in the direction dq."""

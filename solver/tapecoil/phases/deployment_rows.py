@@ -4,8 +4,10 @@ The model has no physical damping, so what the stowed energy and the release's w
 account for in strain, contact and kinetic energy is what the computation lost. Two parts of it
 are not the time integration: the converged residual's work (the Newton tolerance) and the
 contact energy the update of the winding angles adds between steps (the obstacle between the
-turns follows them). With F(q) = r the residual of a step, inertia and averaged forces times
-the step give the kinetic and potential energies' change plus the scheme's dissipation D, so
+turns follows them). With friction on the hub, what its springs hold is potential energy and
+what its slip dissipates since release is taken out of the remainder before it. With F(q) = r
+the residual of a step, inertia and averaged forces times the step give the kinetic and
+potential energies' change plus the scheme's dissipation D, so
 
     stowed + work - potential - kinetic = sum (D - r . dq - update's change),
 
@@ -32,6 +34,7 @@ class DeploymentRows:
         self.external_work = 0.0
         self.residual_work = 0.0
         self.update_energy = 0.0
+        self.friction_at_release = None  # [J] what the hub's friction had dissipated by then
 
     def restart_state(self) -> dict:
         return {
@@ -39,6 +42,7 @@ class DeploymentRows:
             "stowed_energy": self.stowed_energy,
             "residual_work": self.residual_work,
             "update_energy": self.update_energy,
+            "friction_at_release": self.friction_at_release,
         }
 
     def restore(self, state: dict) -> None:
@@ -47,6 +51,7 @@ class DeploymentRows:
         # checkpoints written before these accounts were kept start them at the restart
         self.residual_work = state.get("residual_work", 0.0)
         self.update_energy = state.get("update_energy", 0.0)
+        self.friction_at_release = state.get("friction_at_release")
 
     def add_step_work(self) -> None:
         """The loads' and the converged residual's work over the step just solved (the hold,
@@ -63,12 +68,15 @@ class DeploymentRows:
         its wall time."""
         m = self.m
         e = m.energies()
-        potential = e["strain"] + e["contact"]
+        potential = e["strain"] + e["contact"] + e["friction"]
         if self.stowed_energy is None:
             self.stowed_energy = potential
+        if self.friction_at_release is None:
+            self.friction_at_release = e["friction_dissipated"]
+        friction = e["friction_dissipated"] - self.friction_at_release
         lift = m.lift_off()
         tip = m.tip()
-        dissipated = self.stowed_energy + self.external_work - potential - e["kinetic"]
+        dissipated = self.stowed_energy + self.external_work - potential - e["kinetic"] - friction
         return {
             "time": t,
             "step": step.step if step else 0.0,
@@ -86,10 +94,13 @@ class DeploymentRows:
             "bending_energy": e["bending"],
             "shear_energy": e["shear"],
             "contact_energy": e["contact"],
+            # the hub's friction: its sticking springs' energy, and what its slip has dissipated
+            "friction_energy": e["friction"],
+            "friction_dissipated": friction,
             # the work of the loads: the releasing hold on the free end, and gravity
             "external_work": self.external_work,
-            # what the energy balance misses (the model has no physical damping): the time
-            # integration's dissipation, less the residual's work and the contact updates'
+            # what the energy balance misses (no physical damping but the hub's friction): the
+            # time integration's dissipation, less the residual's work and the contact updates'
             "dissipated_energy": dissipated,
             "residual_work": self.residual_work,
             "contact_update_energy": self.update_energy,

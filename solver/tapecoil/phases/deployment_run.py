@@ -102,7 +102,12 @@ class DeploymentRun(SteppedRun):
             if reason is not None:
                 return reason
             last = self.result.history[-1]
-            start = last["strain_energy"] + last["contact_energy"] + last["kinetic_energy"]
+            start = (
+                last["strain_energy"]
+                + last["contact_energy"]
+                + last["friction_energy"]
+                + last["kinetic_energy"]
+            )
             return energy_refusal(start, m.step_energy(), m.step_work(), self.rows.stowed_energy)
 
         stepper = TimeStepper(m.model.q, m.solve, set_step, m.predict, m.step_error, refusal)

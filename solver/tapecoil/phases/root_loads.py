@@ -5,9 +5,9 @@ moment [N m] the tape exerts on the hub at the root, through deployment. They ar
 attachment's reaction, read from the equation of motion at the converged state t_{n+1}
 (:meth:`~tapecoil.phases.deployment_forms.DeploymentForms.reaction`: inertia plus internal and
 contact forces), whose residual on the root's dofs is what the attachment supplies to the tape;
-the hub carries its opposite. The hub contact adds no torque about the hub's axis (it is
-frictionless and its pressure passes through the axis), but it does add force; the root loads are
-the attachment's alone.
+the hub carries its opposite. The hub contact's pressure passes through the axis and adds no
+torque about it, but it does add force, and its friction (contact.hub_friction) adds both; the
+root loads are the attachment's alone.
 
 Force: the sum over the root's displacement dofs. Moment about the hub's axis point c, about each
 axis e: the virtual work of the reaction in a rigid rotation of the root about e,
