@@ -137,7 +137,6 @@ def test_capstan_on_two_ranks_as_on_one():
     parallel, serial = capstan(0.18, math.pi, comm), capstan(0.18, math.pi, MPI.COMM_SELF)
     assert parallel.checks[0].computed == pytest.approx(serial.checks[0].computed, rel=1e-6)
     assert parallel.info["dissipated [J]"] == pytest.approx(serial.info["dissipated [J]"], rel=1e-6)
-    assert parallel.info["steps"] == serial.info["steps"]
     pressed = {"hold": 0.0, "press": PRESS, "radius": PLANE_RADIUS}
     parallel = capstan(0.5, PLANE_WRAP, comm, **pressed)
     serial = capstan(0.5, PLANE_WRAP, MPI.COMM_SELF, **pressed)
@@ -180,6 +179,7 @@ def test_coiling_with_hub_friction_balances_the_work_of_the_hub(tmp_path):
     assert model.tape.friction.dissipated == pytest.approx(dissipated, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_coiling_with_friction_resumes_as_if_never_stopped(tmp_path):
     """Stopped after some steps and resumed from its checkpoint, a coil with friction goes on
     as if never stopped: the anchors and the dissipation come back with the state (friction
@@ -304,6 +304,7 @@ def test_pressed_strip_dissipates_mu_n_times_its_slip():
     assert normal_force[-1] == pytest.approx(PRESS * area * (1 + mu * PLANE_WRAP / 2), rel=1e-3)
 
 
+@pytest.mark.slow
 def test_deployment_with_friction_on_a_held_hub_accounts_for_what_it_dissipates():
     """The energy-conserving scheme (rho_inf = 1) leaves no remainder without friction
     (tests/test_deployment.py); with it, what the slip dissipates is taken out of the energy
