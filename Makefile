@@ -44,7 +44,7 @@ validate: setup
 	$(RUN) tools/run-tests slow
 
 bench: setup
-	$(RUN) mpirun -n $(NP) python3 tools/bench.py --mesh $(MESH) --case $(CASE) $(if $(CONFIG),--config $(CONFIG))
+	$(RUN) mpirun -n $(NP) python3 tools/bench.py --mesh $(MESH) --case $(CASE) $(if $(CONFIG),--config $(CONFIG)) $(if $(BASELINE),--baseline $(BASELINE))
 
 # the documentation site, built offline (Sphinx with MyST, from the environment's Debian
 # packages) into build/docs: open build/docs/index.html. Every warning is an error.

@@ -319,27 +319,29 @@ def test_a_window_moved_along_a_loaded_cantilever_reaches_the_uninterrupted_run(
 
 @pytest.mark.mpi
 def test_two_ranks_solve_the_hybrid_as_one():
-    """The hybrid cantilever on all ranks and on each alone: the tip deflection to 1e-9, and a
+    """The hybrid cantilever on all ranks and on each alone: the tip deflection to 1e-6, and a
     carried-over state's tip and energies; a flattened end's energies before and after its
-    window moves; a coiled shell's and its fitted beam's energies."""
+    window moves; a coiled shell's and its fitted beam's energies. 1e-6, not round-off: the
+    kernels' sums are reassociated (tapecoil.core.jit), so each rank count rounds its own way
+    and the solves amplify it (measured 8.5e-8 on the tip; 1e-11 with strict IEEE sums)."""
     from tapecoil.models.window import carry_over
 
     assert MPI.COMM_WORLD.size > 1
     parallel, _, _ = cantilever_tip_deflection(Config(), coarse(), comm=MPI.COMM_WORLD)
     serial, _, _ = cantilever_tip_deflection(Config(), coarse(), comm=MPI.COMM_SELF)
-    assert parallel == pytest.approx(serial, rel=1e-9)
+    assert parallel == pytest.approx(serial, rel=1e-6)
     # the carry-over gathers both states from every rank
     carried_parallel, _, tip, energies_parallel = carried_and_direct(MPI.COMM_WORLD, direct=False)
     carried_serial, _, _, energies_serial = carried_and_direct(MPI.COMM_SELF, direct=False)
-    assert energies_parallel == pytest.approx(energies_serial, rel=1e-9)
+    assert energies_parallel == pytest.approx(energies_serial, rel=1e-6)
     gap = carried_parallel.beam.position(tip) - carried_serial.beam.position(tip)
-    assert np.linalg.norm(gap) / CANTILEVER_LENGTH < 1e-9
+    assert np.linalg.norm(gap) / CANTILEVER_LENGTH < 1e-6
     # a window moved along the tape: the shell's sections fitted on every rank alike
     moved_parallel, _, tip, energies_parallel, _ = moved_and_direct(MPI.COMM_WORLD, direct=False)
     moved_serial, _, _, energies_serial, _ = moved_and_direct(MPI.COMM_SELF, direct=False)
-    assert energies_parallel == pytest.approx(energies_serial, rel=1e-9)
+    assert energies_parallel == pytest.approx(energies_serial, rel=1e-6)
     gap = moved_parallel.beam.position(tip) - moved_serial.beam.position(tip)
-    assert np.linalg.norm(gap) / CANTILEVER_LENGTH < 1e-9
+    assert np.linalg.norm(gap) / CANTILEVER_LENGTH < 1e-6
     # a flattened end's window moved ahead: the flat tie's shape copied from every rank's nodes
     energies = []
     for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
@@ -351,8 +353,9 @@ def test_two_ranks_solve_the_hybrid_as_one():
     # the flattened end's converged state is determined only so far: the joint Jacobian is
     # ill-conditioned there (docs/notes/hybrid.md, the flat tie's penalty) and the two runs' steps cut
     # back differently; measured, their tips 3.4e-6 m apart, the equilibrium energies 1.4e-10
-    # and the moved ones, off equilibrium and so first order in that gap, 1.4e-7
-    assert energies[0][0] == pytest.approx(energies[1][0], rel=1e-8)
+    # (7e-8 with reassociated sums) and the moved ones, off equilibrium and so first order in
+    # that gap, 1.4e-7
+    assert energies[0][0] == pytest.approx(energies[1][0], rel=1e-6)
     assert energies[0][1] == pytest.approx(energies[1][1], rel=1e-6)
     # a coiled full shell turned into a hybrid: its sections fitted from every rank's nodes
     parallel = coiled_shell_as_hybrid(MPI.COMM_WORLD)
@@ -403,14 +406,16 @@ def test_a_window_moved_along_a_flattened_tape_reaches_the_uninterrupted_run():
     """The window of a tape flattened at its root moved on into its arc-section beam by two
     elements (beam into shell ahead) and withdrawn from there again (shell into beam behind),
     each stepped on once: as the run that had that window all along, to 1e-9 in energy and
-    1e-8 of L at the tip ahead (measured 5e-14 and 2e-10), and to 2e-3 in energy and of L
-    behind (measured 9.6e-4 and 8.9e-4: the new tie keeps the section as the shell had it, a
-    little off the arc, which the other run's tie holds exact)."""
+    1e-7 of L at the tip ahead (measured 5e-14 and 3.6e-8; the tip 2e-10 with the compiler's
+    strict IEEE sums: it lies along a soft direction, where the residual's round-off, which
+    reassociated sums change, moves it), and to 2e-3 in energy and of L behind (measured
+    9.6e-4 and 8.9e-4: the new tie keeps the section as the shell had it, a little off the
+    arc, which the other run's tie holds exact)."""
     from tapecoil.models.window import carry_over
 
     old, tip = flattened_end(0.05, 0.2, "flat_old")
     old.solve(1.0, first_step=0.1, max_step=0.25)
-    for end, energy_tolerance, tip_tolerance in ((0.225, 1e-9, 1e-8), (0.175, 2e-3, 2e-3)):
+    for end, energy_tolerance, tip_tolerance in ((0.225, 1e-9, 1e-7), (0.175, 2e-3, 2e-3)):
         moved, _ = flattened_end(0.05, end, f"flat_moved_{round(end * 1000)}")
         carry_over(old, moved)
         # consistency: the new tie keeps its edge's shape, the old one its shape and its gaps

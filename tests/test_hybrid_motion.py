@@ -27,11 +27,12 @@ def test_the_hybrid_cantilever_swings_as_the_full_shell_does():
 
 @pytest.mark.mpi
 def test_two_ranks_swing_the_hybrid_as_one():
-    """Half a period at 20 steps per period on 2 ranks and on one: the tip the same to 1e-9 of
-    its deflection."""
+    """Half a period at 20 steps per period on 2 ranks and on one: the tip the same to 1e-6 of
+    its deflection (measured 1.1e-7: the kernels' reassociated sums, tapecoil.core.jit, round
+    each rank count its own way; 1e-11 with strict IEEE sums)."""
     assert MPI.COMM_WORLD.size > 1
     two, one = (
         swing(Config(), coarse(), WINDOW, per_period=20, periods=0.5, comm=comm)
         for comm in (MPI.COMM_WORLD, MPI.COMM_SELF)
     )
-    assert np.abs(two["tips"] - one["tips"]).max() < 1e-9 * abs(one["static"])
+    assert np.abs(two["tips"] - one["tips"]).max() < 1e-6 * abs(one["static"])

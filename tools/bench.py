@@ -28,6 +28,9 @@ peaks of the root's loads on the hub and the root torque's angular impulse to la
 hybrid coils, its coiled state settles into the full shell (the stowed state and the coil's
 measures), and the hybrid deploys from its own coiled state, its window following the lift-off
 down the coil.
+--case coil, deploy and payout keep their figures in the results directory (bench.json);
+--baseline DIR (make's BASELINE=) prints each figure beside those of DIR, the same case run by
+other code (a copy of results/bench-<case>-* kept before the change), and their ratio.
 Run under mpirun for parallel figures: `make bench CASE=coil MESH=default NP=2`; --config (make's
 CONFIG=) runs a case with the settings of a TOML configuration instead of the defaults.
 """
@@ -54,6 +57,9 @@ parser.add_argument(
     type=float,
     default=0.5,
     help="--case hybrid-coil: the hub angles [rad] apart at which both models read the tension",
+)
+parser.add_argument(
+    "--baseline", help="--case coil, deploy or payout: a results directory of the same case to compare with"
 )
 parser.add_argument(
     "--case", default="fold", choices=("fold", "coil", "deploy", "payout", "hybrid-coil", "hybrid")
@@ -175,6 +181,12 @@ if args.case in ("coil", "deploy", "payout"):
     config = load_config(args.config)
     config = dataclasses.replace(config, mesh=dataclasses.replace(config.mesh, preset=args.mesh))
     coil_dir = Path(f"results/bench-coil-{args.mesh}-np{MPI.COMM_WORLD.size}")
+    baseline = {}
+    if args.baseline:  # read before the run: a wrong directory fails at once
+        kept = Path(args.baseline) / "bench.json"
+        if not kept.is_file():
+            raise SystemExit(f"--baseline {args.baseline}: no bench.json (a results directory of make bench)")
+        baseline = json.loads(kept.read_text())
     if args.case == "coil":
         summary, _ = run_coiling(config, coil_dir, progress=False)
         case = "coiling, flattening + 36 rad"
@@ -205,9 +217,19 @@ if args.case in ("coil", "deploy", "payout"):
             report[f"{name} (error)"] = value["error"]
         if isinstance(value, dict) and value.get("max_error") is not None:
             report[f"{name} (largest error)"] = value["max_error"]
+    out_dir = coil_dir if args.case == "coil" else Path(out)
     if MPI.COMM_WORLD.rank == 0:
+        (out_dir / "bench.json").write_text(json.dumps(report, indent=2))
+        if baseline:
+            print(f"{'':<36} {'this code':>12} {'baseline':>12} {'ratio':>8}   (baseline: {args.baseline})")
         for key, value in report.items():
-            print(f"{key:<36} {value:.4g}" if isinstance(value, float) else f"{key:<36} {value}")
+            other = baseline.get(key)
+            numbers = isinstance(value, float | int) and isinstance(other, float | int)
+            if numbers and not isinstance(value, bool):
+                ratio = f"{value / other:>8.3f}" if other else ""
+                print(f"{key:<36} {value:>12.4g} {other:>12.4g} {ratio}")
+            else:
+                print(f"{key:<36} {value:.4g}" if isinstance(value, float) else f"{key:<36} {value}")
     raise SystemExit(0)
 
 config = load_config(args.config)

@@ -29,7 +29,7 @@ import dolfinx
 import numpy as np
 import ufl
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.rotation import rotated, rotated_derivative, rotated_second_derivative
 
 __all__ = ["BeamStripSurface", "ContactSurface", "JoinedSurface", "ShellSurface", "Unknowns"]
@@ -135,7 +135,7 @@ class ShellSurface(ContactSurface):
         self.owned = global_node[:n_owned]
         self._gather = _Gather(comm, self.owned, self.n_nodes)
         test = ufl.TestFunction(nodes.space)
-        area = dolfinx.fem.assemble_vector(dolfinx.fem.form(test * model.jacobian * model.dx))
+        area = dolfinx.fem.assemble_vector(jit.form(test * model.jacobian * model.dx))
         area.scatter_reverse(dolfinx.la.InsertMode.add)
         self.reference = self._gather(nodes.reference[:, :n_owned].T.copy())
         self.material = self._gather(nodes.xi[:, :n_owned].T.copy())

@@ -27,8 +27,9 @@ import cffi
 
 __all__ = ["CKernel", "cache_directory"]
 
-# no -ffast-math: reassociated sums make results depend on the data's layout, and the same
-# state on 1 and 2 ranks must give the same numbers to round-off
+# no -ffast-math (finite-math-only would hide a NaN from the checks that stop a run on it); the
+# contact's kernels are short loops over a pair's points, which reassociated sums would not
+# speed up (the forms' long kernels do: tapecoil.core.jit)
 FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fno-math-errno")
 
 

@@ -30,7 +30,7 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.convergence import ResidualTest
 from tapecoil.core.dofs import global_size, owned_constrained_dofs, owned_size
 from tapecoil.core.newton import JacobianOperator, SolveResult, assemble_residual, create_snes, run_snes
@@ -112,12 +112,12 @@ class DofCoupling:
         matrices = dolfinx.fem.functionspace(mesh, ("DG", 0, (n, n)))
         tested = ufl.inner(gradient, ufl.TestFunction(vectors)) * measure
         # (form, the vector its cell values are assembled into)
-        self._gradient = (dolfinx.fem.form(tested), compat.create_vector(vectors))
+        self._gradient = (jit.form(tested), compat.create_vector(vectors))
         self._hessian = (
-            dolfinx.fem.form(ufl.inner(hessian, ufl.TestFunction(matrices)) * measure),
+            jit.form(ufl.inner(hessian, ufl.TestFunction(matrices)) * measure),
             compat.create_vector(matrices),
         )
-        self._mixed = dolfinx.fem.form(ufl.derivative(tested, q0, ufl.TrialFunction(V0)))
+        self._mixed = jit.form(ufl.derivative(tested, q0, ufl.TrialFunction(V0)))
         self._mixed_matrix = dolfinx.fem.petsc.create_matrix(self._mixed)
         # e_j: ones at component j of every cell, so that M^T e_j sums the cells' rows of j
         self._components = []
@@ -126,7 +126,7 @@ class DofCoupling:
             e.array[:] = 0.0
             e.array[j::n] = 1.0
             self._components.append(e)
-        self.energy = dolfinx.fem.form(energy)
+        self.energy = jit.form(energy)
 
     def read(self) -> None:
         """c from q1's current values (collective)."""
@@ -257,8 +257,8 @@ class CoupledSNESSolver:
         self.blocks = blocks
         self.coupling = coupling
         first, second = blocks
-        self.F_forms = [dolfinx.fem.form(first.F + coupling.residual0), dolfinx.fem.form(second.F)]
-        self.J_forms = [dolfinx.fem.form(first.J + coupling.jacobian0), dolfinx.fem.form(second.J)]
+        self.F_forms = [jit.form(first.F + coupling.residual0), jit.form(second.F)]
+        self.J_forms = [jit.form(first.J + coupling.jacobian0), jit.form(second.J)]
         self.b = [compat.create_vector(blk.q.function_space) for blk in blocks]
         comm = first.q.function_space.mesh.comm
         self.comm = comm

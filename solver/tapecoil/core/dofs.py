@@ -13,7 +13,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.expression import expression_at
 
 
@@ -29,7 +29,7 @@ def global_size(V) -> int:
 
 def global_scalar(form, comm) -> float:
     """A scalar form (UFL or compiled) assembled and summed over all ranks of ``comm`` (collective)."""
-    compiled = form if isinstance(form, dolfinx.fem.Form) else dolfinx.fem.form(form)
+    compiled = form if isinstance(form, dolfinx.fem.Form) else jit.form(form)
     return comm.allreduce(dolfinx.fem.assemble_scalar(compiled), op=MPI.SUM)
 
 

@@ -14,10 +14,12 @@ from ufl.algorithms.apply_algebra_lowering import apply_algebra_lowering
 from ufl.algorithms.apply_derivatives import apply_derivatives
 from ufl.algorithms.transformer import strip_variables
 
+from tapecoil.core import jit
+
 
 def expression_at(expr, points: np.ndarray) -> dolfinx.fem.Expression:
     """A :class:`dolfinx.fem.Expression` of ``expr`` (UFL) at ``points`` of the reference cell,
     its kernel independent of the variables' counts."""
     if not isinstance(expr, ufl.core.expr.Expr):
         raise TypeError(f"an expression must be a UFL expression, got {type(expr).__name__}")
-    return dolfinx.fem.Expression(strip_variables(apply_derivatives(apply_algebra_lowering(expr))), points)
+    return jit.expression(strip_variables(apply_derivatives(apply_algebra_lowering(expr))), points)

@@ -19,7 +19,7 @@ import dolfinx.fem.petsc
 import numpy as np
 from petsc4py import PETSc
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.convergence import ResidualTest
 from tapecoil.core.petsc_options import DEFAULT_PETSC_OPTIONS, check_prefix, options_in_database
 
@@ -143,8 +143,8 @@ class SNESSolver:
         check_prefix(prefix)
         self.q = q
         self.bcs = list(bcs)
-        self.F_form = dolfinx.fem.form(F)
-        self.J_form = dolfinx.fem.form(J)
+        self.F_form = jit.form(F)
+        self.J_form = jit.form(J)
         V = q.function_space
         self.b = compat.create_vector(V)
         self.x = compat.create_vector(V)

@@ -51,6 +51,7 @@ import dolfinx
 import numpy as np
 import ufl
 
+from tapecoil.core import jit
 from tapecoil.core.smoothing import penetration_slope_ufl, penetration_ufl, smoothstep, smoothstep_ufl
 from tapecoil.hub.frame import HubFrame
 from tapecoil.models.shell import NaghdiShell, Nodes
@@ -280,7 +281,7 @@ class CoilContact:
         """The hub's push on the tape [N]: the radial components, away from the axis, of the
         force its contact (with the fairing) exerts on the tape's nodes, summed (collective)."""
         if getattr(self, "_reaction", None) is None:
-            form = dolfinx.fem.form(ufl.derivative(self.energy_hub, self.model.q, self.model.dq))
+            form = jit.form(ufl.derivative(self.energy_hub, self.model.q, self.model.dq))
             self._reaction = (form, dolfinx.fem.Function(self.model.W))
         form, force = self._reaction
         force.x.array[:] = 0.0

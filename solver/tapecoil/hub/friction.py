@@ -30,7 +30,7 @@ import dolfinx
 import numpy as np
 import ufl
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.expression import expression_at
 
@@ -91,13 +91,10 @@ class HubFriction:
             ufl.as_vector([self.angle - self.traction[0] / (eps * r_hub), face[1] - self.traction[1] / eps]),
             points,
         )
-        self._spring = dolfinx.fem.form(
-            0.5 * ufl.dot(self.traction, self.traction) / eps * model.jacobian * model.dx
-        )
-        self._dissipation = dolfinx.fem.form(
-            ufl.dot(self._traction_q, self._move) * model.jacobian * model.dx
-        )
+        self._spring = jit.form(0.5 * ufl.dot(self.traction, self.traction) / eps * model.jacobian * model.dx)
+        self._dissipation = jit.form(ufl.dot(self._traction_q, self._move) * model.jacobian * model.dx)
         self.dissipated = 0.0  # [J] by slip since reset
+        self._torque = None  # compiled on first use: a deployment never reads it
 
     def reset(self) -> None:
         """Anchors where the face points are now: no friction force, nothing dissipated."""
@@ -124,9 +121,9 @@ class HubFriction:
         """The torque the hub exerts on the tape through friction, in the sense the hub turns
         [N m] (collective): its work per radian of the hub turned under the tape, -tau_theta
         r_hub over the face (a turn of the hub moves every anchor by r_hub per radian)."""
-        if getattr(self, "_torque", None) is None:
+        if self._torque is None:
             m = self.model
-            self._torque = dolfinx.fem.form(-self.r_hub * self.traction[0] * m.jacobian * m.dx)
+            self._torque = jit.form(-self.r_hub * self.traction[0] * m.jacobian * m.dx)
         return global_scalar(self._torque, self.model.mesh.comm)
 
     def spring_energy(self) -> float:

@@ -16,6 +16,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
+from tapecoil.core import jit
 from tapecoil.core.dofs import global_scalar
 from tapecoil.measures.centre_line import edge_lines
 from tapecoil.measures.section_forces import SectionForces
@@ -35,7 +36,7 @@ class CoilSection:
         self.bounds = (dolfinx.fem.Constant(shell.mesh, 0.0), dolfinx.fem.Constant(shell.mesh, 0.0))
         xi1 = ufl.SpatialCoordinate(shell.mesh)[0]
         inside = ufl.conditional(ufl.And(ufl.ge(xi1, self.bounds[0]), ufl.le(xi1, self.bounds[1])), 1.0, 0.0)
-        self.energy_forms = [dolfinx.fem.form(f) for f in shell.energy_forms(inside)]
+        self.energy_forms = [jit.form(f) for f in shell.energy_forms(inside)]
         self.sections = SectionForces(shell, tape.contact.nodes, tape.comm)
         self.vertex_columns = _vertex_columns(shell.mesh, tape.comm)
 

@@ -21,6 +21,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
+from tapecoil.core import jit
 from tapecoil.core.dofs import assemble_into
 
 
@@ -34,7 +35,7 @@ class SectionForces:
 
     def __init__(self, model, nodes, comm=MPI.COMM_WORLD):
         self.model, self.nodes, self.comm = model, nodes, comm
-        self.form = dolfinx.fem.form(ufl.derivative(model.strain_energy, model.q, model.dq))
+        self.form = jit.form(ufl.derivative(model.strain_energy, model.q, model.dq))
         self.force = dolfinx.fem.Function(model.W)
         self.n_owned = nodes.space.dofmap.index_map.size_local
         xi1 = nodes.xi[0]

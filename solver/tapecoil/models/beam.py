@@ -46,7 +46,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.expression import expression_at
 from tapecoil.core.rotation import rotation_matrices
@@ -333,5 +333,5 @@ class GeometricallyExactBeam:
     def strain_energy(self) -> float:
         """The beam's strain energy [J] (collective)."""
         if getattr(self, "_energy_form", None) is None:
-            self._energy_form = dolfinx.fem.form(self.energy)  # compiled once, not at every call
+            self._energy_form = jit.form(self.energy)  # compiled once, not at every call
         return global_scalar(self._energy_form, self.mesh.comm)

@@ -26,6 +26,7 @@ import dolfinx
 import numpy as np
 import ufl
 
+from tapecoil.core import jit
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.models.beam import SERIES_BELOW, _rodrigues_coefficients, _skew, rotation
@@ -117,7 +118,7 @@ class BeamDynamics:
         u, theta = ufl.split(self._velocity)
         frame_now = model.frame_n  # at a step's start, the current frame
         inertia_now = frame_now * section_inertia * frame_now.T
-        self._kinetic = dolfinx.fem.form(
+        self._kinetic = jit.form(
             (0.5 * self.line_density * ufl.dot(u, u) + 0.5 * ufl.dot(theta, inertia_now * theta)) * model.dx
         )
         # the equation of motion at t_{n+1}, once the scheme has advanced and the beam committed
@@ -130,8 +131,8 @@ class BeamDynamics:
         ) * model.dx + residual
         self.reaction_form = self.reaction_form - self.weight
         x = ufl.SpatialCoordinate(model.mesh) + ufl.split(model.q)[0]
-        self._momenta = [dolfinx.fem.form(self.line_density * u[i] * model.dx) for i in range(3)] + [
-            dolfinx.fem.form((self.line_density * ufl.cross(x, u)[i] + (inertia_now * theta)[i]) * model.dx)
+        self._momenta = [jit.form(self.line_density * u[i] * model.dx) for i in range(3)] + [
+            jit.form((self.line_density * ufl.cross(x, u)[i] + (inertia_now * theta)[i]) * model.dx)
             for i in range(3)
         ]
 

@@ -12,7 +12,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.dofs import assemble_into, owned_subspace_dofs
 from tapecoil.core.expression import expression_at
 from tapecoil.core.newton import PerUnitLoad, PointForce, SNESSolver
@@ -383,7 +383,7 @@ class BeamProblem:
         node at ``point``, dE/du there: the load its support carries (collective)."""
         if getattr(self, "_internal_form", None) is None:
             energy = self.model.energy + sum(self.energy_terms)
-            self._internal_form = dolfinx.fem.form(ufl.derivative(energy, self.model.q, self.model.dq))
+            self._internal_form = jit.form(ufl.derivative(energy, self.model.q, self.model.dq))
             self._internal_vector = dolfinx.fem.Function(self.model.W)
         f = assemble_into(self._internal_vector, self._internal_form)
         vertices = self._vertices(point)

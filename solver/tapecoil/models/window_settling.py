@@ -15,6 +15,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
+from tapecoil.core import jit
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.models.nodes import Nodes
@@ -78,7 +79,7 @@ def settle(hybrid, choose, config) -> dict:
     x = nodes.xi[0]
     tol = 1e-9 * (1.0 + abs(end))
     free = choose(x, start, end, tol) & (x > start + tol) & (x < end - tol)
-    strain = dolfinx.fem.form(model.strain_energy)
+    strain = jit.form(model.strain_energy)
     before = global_scalar(strain, shell.comm)
     if shell.comm.allreduce(int(free.sum())) == 0:
         return {

@@ -37,7 +37,7 @@ from mpi4py import MPI
 
 from tapecoil import theory
 from tapecoil.config import Config, ConfigError
-from tapecoil.core import checkpoint
+from tapecoil.core import checkpoint, jit
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import global_scalar, owned_constrained_dofs
 from tapecoil.core.newton import SNESSolver
@@ -139,7 +139,7 @@ class CoilingProblem:
         self.bcs = bcs
 
         # the pull: T spread evenly over the free end's arc; its work is T times the end's mean u_x
-        self.end_slide_form = dolfinx.fem.form(model.u[0] / tp.b * model.ds(FREE_END))
+        self.end_slide_form = jit.form(model.u[0] / tp.b * model.ds(FREE_END))
         self.pull_work = self.tension * model.u[0] / tp.b * model.ds(FREE_END)
         self.obstacles = tuple(obstacles)
         self.energy = tape.energy + sum(o.energy for o in self.obstacles)

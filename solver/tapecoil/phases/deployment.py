@@ -26,7 +26,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from tapecoil.config import Config
-from tapecoil.core import checkpoint
+from tapecoil.core import checkpoint, jit
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import assemble_into, global_dot, global_scalar, owned_constrained_dofs, owned_size
 from tapecoil.core.newton import SNESSolver
@@ -82,8 +82,8 @@ class DeploymentProblem:
         self.gravity = np.asarray(cfg.deployment.gravity, dtype=float)
         g = dolfinx.fem.Constant(model.mesh, self.gravity)
         self.weight = forms.weight(g)  # its virtual work, a UFL form (the root loads take it too)
-        self._weight = dolfinx.fem.form(self.weight)
-        self._weight_work = dolfinx.fem.form(forms.weight_work(g))
+        self._weight = jit.form(self.weight)
+        self._weight_work = jit.form(forms.weight_work(g))
         loads = self.hold.form - self.weight
         if friction is not None:
             loads = loads + friction
@@ -106,7 +106,7 @@ class DeploymentProblem:
             options=cfg.deployment.petsc_options,
             state_scale=model.rounding_scale(),
         )
-        self.kinetic_form = dolfinx.fem.form(kinetic * model.jacobian * model.dx)
+        self.kinetic_form = jit.form(kinetic * model.jacobian * model.dx)
         self.solver.point_forces.append(self.hold.point_force())
         # the turns' contact force at the level of the other internal forces: generalized-alpha's
         # average, and for rho_inf = 1 the trapezoidal mean of the two states (not a discrete
@@ -114,9 +114,9 @@ class DeploymentProblem:
         # only conserving to the order of the step)
         alpha_f = ti.parameters.alpha_f if self.scheme == "alpha" else 0.5
         self.solver.terms += c.contact_terms(model.q, self.bcs, 1.0 - alpha_f, (alpha_f, ti.q_old))
-        self._tip_forms = [dolfinx.fem.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
+        self._tip_forms = [jit.form(model.phi[i] / tp.b * model.ds(FREE_END)) for i in range(3)]
         self.root_loads = RootLoads(self)
-        self._angular_momentum = dolfinx.fem.form(forms.angular_momentum(c.frame) * model.jacobian * model.dx)
+        self._angular_momentum = jit.form(forms.angular_momentum(c.frame) * model.jacobian * model.dx)
         self.rotor = self.coupling = None
         if cfg.deployment.hub == "free":
             self.rotor = HubRotor(cfg.hub.inertia, ti.parameters, self._stowed_angle)
@@ -202,10 +202,10 @@ class DeploymentProblem:
         centripetal term) is solved with a direct solver; the attached root has zero acceleration.
         """
         model, ti = self.model, self.integrator
-        M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(self.forms.mass_at_rest()), bcs=self.bcs)
+        M = dolfinx.fem.petsc.assemble_matrix(jit.form(self.forms.mass_at_rest()), bcs=self.bcs)
         M.assemble()
         internal = dolfinx.fem.Function(model.W)
-        assemble_into(internal, dolfinx.fem.form(self.forms.static))
+        assemble_into(internal, jit.form(self.forms.static))
         self.tape.add_self_contact_force(internal)
         b = internal.x.petsc_vec.copy()
         b.scale(-1.0)

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import dolfinx
 import ufl
 
+from tapecoil.core import jit
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.newton import SNESSolver
 from tapecoil.core.stepping import Continuation, StepRecord
@@ -57,7 +57,7 @@ class DrivenMotion:
         )
         alpha_f = ti.parameters.alpha_f
         self.solver.terms += tape.contact_terms(shell.q, self.bcs, 1.0 - alpha_f, (alpha_f, ti.q_old))
-        self._kinetic = dolfinx.fem.form(kinetic * shell.jacobian * shell.dx)
+        self._kinetic = jit.form(kinetic * shell.jacobian * shell.dx)
         ti.v_old.x.array[:] = 0.0
         ti.a_old.x.array[:] = 0.0
         ti.restart()

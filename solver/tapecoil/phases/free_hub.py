@@ -40,7 +40,7 @@ import numpy as np
 import ufl
 from petsc4py import PETSc
 
-from tapecoil.core import compat
+from tapecoil.core import compat, jit
 from tapecoil.core.dofs import global_dot, owned_constrained_dofs
 from tapecoil.core.newton import SolveResult
 from tapecoil.hub.rotor import HubRotor
@@ -138,7 +138,7 @@ class FreeHubCoupling(HubNewton):
         W = model.model.W
         self.root, self.contact, self.solver = model.tape.root, model.contact, model.solver
         self.rates = dolfinx.fem.Function(W)  # G, the action's argument (ghosts updated)
-        self._action = dolfinx.fem.form(ufl.action(jacobian, self.rates))
+        self._action = jit.form(ufl.action(jacobian, self.rates))
         self._vec = compat.create_vector(W)
         self._w = compat.create_vector(W)
         self._held = owned_constrained_dofs(W, model.bcs)

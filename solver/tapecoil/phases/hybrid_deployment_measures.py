@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import math
 
-import dolfinx
 import numpy as np
 import ufl
 
+from tapecoil.core import jit
 from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
 from tapecoil.phases.deployment_forms import director_rates
@@ -52,13 +52,13 @@ class HybridDeploymentMeasures:
         _, d_dot, _ = director_rates(shell, shell.theta, v_theta)
         rho, h = tape.density, tape.h
         kinetic = 0.5 * rho * h * (ufl.dot(v_u, v_u) + h**2 / 12 * ufl.dot(d_dot, d_dot))
-        self._shell_kinetic = dolfinx.fem.form(kinetic * shell.jacobian * shell.dx)
-        self._strain = dolfinx.fem.form(shell.strain_energy)
-        self._contact = dolfinx.fem.form(hybrid.shell.contact.energy)
+        self._shell_kinetic = jit.form(kinetic * shell.jacobian * shell.dx)
+        self._strain = jit.form(shell.strain_energy)
+        self._contact = jit.form(hybrid.shell.contact.energy)
         beam = hybrid.beam
-        self._beam_contact = dolfinx.fem.form(sum(beam.energy_terms)) if beam.energy_terms else None
+        self._beam_contact = jit.form(sum(beam.energy_terms)) if beam.energy_terms else None
         spin = motion.shell_forms.angular_momentum(frame)
-        self._shell_momentum = dolfinx.fem.form(spin * shell.jacobian * shell.dx)
+        self._shell_momentum = jit.form(spin * shell.jacobian * shell.dx)
 
     def window(self) -> tuple[float, float]:
         """The shell window's start and end along the tape [m]."""

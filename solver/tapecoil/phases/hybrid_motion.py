@@ -16,6 +16,7 @@ import dolfinx
 import numpy as np
 
 from tapecoil.config import SolverConfig, TapeConfig
+from tapecoil.core import jit
 from tapecoil.core.dofs import global_scalar
 from tapecoil.core.timeint import GeneralizedAlpha
 from tapecoil.models.beam_dynamics import BeamDynamics
@@ -74,7 +75,7 @@ class HybridMotion:
         F_s, J_s = inertia.alpha_forms(forces)
         self.beam = BeamDynamics(hybrid.beam, line_density, rotary_inertia, rho_inf=rho_inf, gravity=gravity)
         work.append(self.beam.weight_work)
-        self._weight_work = [dolfinx.fem.form(w) for w in work]
+        self._weight_work = [jit.form(w) for w in work]
         self.settings = settings or SolverConfig()
         shell.point_forces.extend(point_forces)
         # the parts' contact force at the level of the other internal forces, as the full shell's

@@ -13,6 +13,7 @@ import dolfinx
 import numpy as np
 import ufl
 
+from tapecoil.core import jit
 from tapecoil.core.dofs import assemble_into, global_dot
 from tapecoil.core.newton import PointForce
 from tapecoil.core.smoothing import smoothstep
@@ -54,11 +55,11 @@ class EndHold:
         )  # per unit edge length: an element's membrane stiffness
         spring = k_hold * (ufl.dot(u - u0, du) + ell**2 * ufl.dot(theta - theta0, dtheta))
         self.form = integrator.at_midpoint(self.factor * spring * model.ds(FREE_END))
-        self._compiled = dolfinx.fem.form(self.form)
+        self._compiled = jit.form(self.form)
         subs = [(0, j) for j in range(3)] + [(1, j) for j in range(2)]
         self.end_dofs = np.unique(np.concatenate([tape.edge_dofs(FREE_END, s) for s in subs]))
         self.dead = _Magnitude(np.zeros(len(self.end_dofs)))
-        self._internal = dolfinx.fem.form(ufl.derivative(tape.energy, model.q, model.dq))
+        self._internal = jit.form(ufl.derivative(tape.energy, model.q, model.dq))
         self.dead_full = self.end_internal_force()
 
     def point_force(self) -> PointForce:

@@ -23,6 +23,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
+from tapecoil.core import jit
 from tapecoil.core.dofs import assemble_into, owned_constrained_dofs
 from tapecoil.core.rotation import rotation_matrix
 
@@ -78,7 +79,7 @@ class RootLoads:
         self.m, self.eps = model, eps
         tape = model.tape
         # the root's own share of the weight is the attachment's too
-        self.form = dolfinx.fem.form(model.forms.reaction() - model.weight)
+        self.form = jit.form(model.forms.reaction() - model.weight)
         self.reaction = dolfinx.fem.Function(model.model.W)
         nodes = tape.contact.nodes
         held = owned_constrained_dofs(model.model.W, model.bcs)
@@ -128,7 +129,7 @@ class HybridRootLoads:
             self.model = model
             held = owned_constrained_dofs(model.W, beam.bcs)
             self.root = np.flatnonzero(np.isin(model.node_u_dofs[:, 0], held))
-        self.form = dolfinx.fem.form(shell_form if self.shell else beam_form)
+        self.form = jit.form(shell_form if self.shell else beam_form)
         self.reaction = dolfinx.fem.Function(self.model.W)
 
     @classmethod

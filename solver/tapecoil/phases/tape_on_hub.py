@@ -20,7 +20,7 @@ from mpi4py import MPI
 from tapecoil.config import Config
 from tapecoil.contact.surface import ShellSurface
 from tapecoil.contact.term import SOLVER_OPTIONS
-from tapecoil.core import checkpoint
+from tapecoil.core import checkpoint, jit
 from tapecoil.core.cell_state import function_field, gather_fields, scatter_fields
 from tapecoil.core.checkpoint import state_parts
 from tapecoil.core.dofs import assemble_into, global_scalar
@@ -92,7 +92,7 @@ class TapeOnHub:
         ]
         if self.contact.energy_coil is not None:
             parts.append(("contact_coil", self.contact.energy_coil))
-        self.forms = {name: dolfinx.fem.form(form) for name, form in parts}
+        self.forms = {name: jit.form(form) for name, form in parts}
         self._internal: dict[int, tuple] = {}
         self._root_dofs = None
 
@@ -175,7 +175,7 @@ class TapeOnHub:
             force = ufl.derivative(energy, self.model.q, self.model.dq)
             if self.friction is not None:
                 force = force + self.friction.residual
-            form = dolfinx.fem.form(force)
+            form = jit.form(force)
             cached = self._internal[id(energy)] = (energy, form, dolfinx.fem.Function(self.model.W))
         _, form, vector = cached
         assemble_into(vector, form)

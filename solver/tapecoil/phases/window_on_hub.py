@@ -11,6 +11,7 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.config import Config
+from tapecoil.core import jit
 from tapecoil.core.dofs import assemble_into, global_scalar, owned_subspace_dofs
 from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution
 from tapecoil.geometry.sections import CircularArcSection
@@ -142,7 +143,7 @@ class WindowOnHub(ShellProblem):
     def strain_energy(self) -> float:
         """The window's strain energy [J] (collective)."""
         if self._strain_form is None:
-            self._strain_form = dolfinx.fem.form(self.model.strain_energy)
+            self._strain_form = jit.form(self.model.strain_energy)
         return global_scalar(self._strain_form, self.strip.mesh.comm)
 
     def root_force(self) -> np.ndarray:
@@ -150,7 +151,7 @@ class WindowOnHub(ShellProblem):
         (collective)."""
         model = self.model
         if self._root_form is None:
-            self._root_form = dolfinx.fem.form(ufl.derivative(self._energy, model.q, model.dq))
+            self._root_form = jit.form(ufl.derivative(self._energy, model.q, model.dq))
             self._root_vector = dolfinx.fem.Function(model.W)
             facets = self.strip.facet_tags.find(ROOT)
             self._root_dofs = [owned_subspace_dofs(model.W, (0, i), 1, facets) for i in range(3)]

@@ -30,6 +30,7 @@ import ufl
 from mpi4py import MPI
 
 from tapecoil.config import SolverConfig
+from tapecoil.core import jit
 from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.geometry.meshes import MeshResolution
 from tapecoil.geometry.surfaces import MappedSurface
@@ -101,7 +102,7 @@ class CapstanProblem(ShellProblem):
         stretch = ufl.dot(self.grip_tangent, self.model.phi - ufl.as_vector(frame.axis_point))
         line, ds = self._line_element("xi1_max"), self.model.ds(self.edge("xi1_max"))
         self.grip_energy = 0.5 * self.grip_stiffness * stretch**2 * line * ds
-        self._grip_force = dolfinx.fem.form(self.grip_stiffness * stretch * line * ds)
+        self._grip_force = jit.form(self.grip_stiffness * stretch * line * ds)
         self.fix_point((0.0, 0.0), "y")  # along the axis, held by friction alone or not at all
         self.set_load(0.0)
 

@@ -36,7 +36,6 @@ from __future__ import annotations
 import math
 import time
 
-import dolfinx
 import numpy as np
 import ufl
 from mpi4py import MPI
@@ -44,6 +43,7 @@ from petsc4py import PETSc
 
 from tapecoil import theory
 from tapecoil.config import Config
+from tapecoil.core import jit
 from tapecoil.core.arclength import ArcLength, ArcLengthError, ArcLengthSettings
 from tapecoil.core.dofs import global_scalar, global_size
 from tapecoil.core.newton import SNESSolver
@@ -125,7 +125,7 @@ class BentTape:
             prefix=self.prefix,
             state_scale=model.rounding_scale(),
         )
-        self._energy_form = dolfinx.fem.form(self.energy)
+        self._energy_form = jit.form(self.energy)
         self.angle = 0.0
 
     def set_angle(self, phi: float) -> None:

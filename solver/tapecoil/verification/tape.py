@@ -15,6 +15,7 @@ from petsc4py import PETSc
 
 from tapecoil import theory
 from tapecoil.config import Config
+from tapecoil.core import jit
 from tapecoil.core.dofs import cell_midpoint_values, global_scalar, global_size
 from tapecoil.core.newton import SNESSolver
 from tapecoil.geometry.meshes import FREE_END, ROOT, MeshResolution, create_strip_mesh
@@ -113,7 +114,7 @@ def stress_free(config: Config, resolution: MeshResolution, comm=MPI.COMM_WORLD)
     strip = create_strip_mesh(comm, StripGeometry.from_config(config), resolution)
     model = NaghdiShell(strip, shell_material(config), director_frame="global")
     energy = energies(model)["total"]
-    F0 = dolfinx.fem.form(model.residual())
+    F0 = jit.form(model.residual())
 
     def residual_norm() -> float:
         b = dolfinx.fem.petsc.assemble_vector(F0)
@@ -192,7 +193,7 @@ def tape_fold(
         prefix=solver_prefix("tape-fold"),
         state_scale=model.rounding_scale(),
     )
-    energy_form = dolfinx.fem.form(total_energy)
+    energy_form = jit.form(total_energy)
     path = []
     writer = None
     if snapshots is not None:
