@@ -9,15 +9,17 @@ from mpi4py import MPI
 from tapecoil.config import Config, DeploymentConfig, TapeConfig
 
 
-def short_stowed_config(t_end=0.012, rho_inf=0.5) -> Config:
-    """A 0.12 m tape of the benchmark section, coiled by 2 rad, released for t_end."""
+def short_stowed_config(t_end=0.012, rho_inf=0.5, rtol=None) -> Config:
+    """A 0.12 m tape of the benchmark section, coiled by 2 rad, released for t_end; ``rtol``
+    the time steps' Newton tolerance (default: deployment.rtol's)."""
     cfg = Config()
+    newton = {} if rtol is None else {"rtol": rtol}
     return dataclasses.replace(
         cfg,
         tape=dataclasses.replace(TapeConfig(), L=0.12),
         coiling=dataclasses.replace(cfg.coiling, hub_angle=2.0),
         mesh=dataclasses.replace(cfg.mesh, preset="coarse"),
-        deployment=dataclasses.replace(DeploymentConfig(), t_end=t_end, rho_inf=rho_inf),
+        deployment=dataclasses.replace(DeploymentConfig(), t_end=t_end, rho_inf=rho_inf, **newton),
     )
 
 
@@ -89,10 +91,11 @@ def test_release_unspools_the_tape_and_balances_energy(deployed_short):
     assert dissipated.max() < 0.02 * stowed
     assert dissipated.min() > -1e-4 * stowed
     # generalized-alpha only takes energy, step by step (measured: 0.49 % over the 12 ms); the
-    # residual's work is at the Newton tolerance (measured: 1e-9)
+    # residual's work is at the Newton tolerance (measured: 1.7e-5 of the stowed energy in a
+    # step at deployment.rtol = 1e-5, 1e-9 at 1e-8)
     scheme = np.array([r["scheme_dissipation"] for r in h])
     assert np.diff(scheme).min() > -1e-8 * stowed
-    assert max(abs(r["residual_work"]) for r in h) < 1e-7 * stowed
+    assert max(abs(r["residual_work"]) for r in h) < 1e-4 * stowed
     # the release did little work: the hold's spring and forces let go without a shock
     assert abs(h[-1]["external_work"]) < 0.01 * stowed
     assert max(r["max_penetration"] for r in h) < 0.5 * model.config.tape.h
@@ -106,9 +109,10 @@ def test_trapezoidal_rule_conserves_energy(stowed_short):
     stowed energy) the remainder strain + contact + kinetic - stowed - work of the release stays
     at the Newton tolerance's level, and it is the converged residual's work: what is left
     for the scheme is round-off (measured: 2e-14 of the stowed energy, against 1.5e-9 for the
-    residual's work).
+    residual's work). Newton to 1e-8 of each step's first residual: the balance closes to
+    the tolerance, and the default's would hide the scheme's part.
     """
-    model, result = deploy(stowed_short, short_stowed_config(rho_inf=1.0))
+    model, result = deploy(stowed_short, short_stowed_config(rho_inf=1.0, rtol=1e-8))
     assert model.scheme == "conserving"
     h = result.history
     stowed = h[0]["strain_energy"] + h[0]["contact_energy"]
@@ -296,9 +300,15 @@ def test_a_free_hub_turns_back_and_keeps_the_angular_momentum(stowed_short):
 
 def test_a_free_hub_far_heavier_than_the_tape_deploys_as_a_fixed_one(stowed_short):
     """Consistency of the coupling: with J = 10^4 kg m^2 the hub barely turns (the root torque
-    of about 0.05 N m turns it by 1e-11 rad in 2 ms) and the tape moves as on a fixed hub."""
-    _, free = deploy(stowed_short, free_hub_config(1e4, t_end=0.002))
-    _, fixed = deploy(stowed_short, short_stowed_config(t_end=0.002))
+    of about 0.05 N m turns it by 1e-11 rad in 2 ms) and the tape moves as on a fixed hub.
+    Both solved to a residual 1e-8 of each step's first: the two Newton iterations differ, and
+    at the default 1e-5 their states differ by what that leaves (measured 1e-6)."""
+
+    def tight(config):
+        return dataclasses.replace(config, deployment=dataclasses.replace(config.deployment, rtol=1e-8))
+
+    _, free = deploy(stowed_short, tight(free_hub_config(1e4, t_end=0.002)))
+    _, fixed = deploy(stowed_short, tight(short_stowed_config(t_end=0.002)))
     a, b = free.history[-1], fixed.history[-1]
     assert abs(a["hub_angle"] - free.history[0]["hub_angle"]) < 1e-9
     for key in ("tip_x", "tip_z", "lambda", "kinetic_energy"):
@@ -337,8 +347,9 @@ def test_error_controlled_steps_follow_the_motion_to_its_tolerance(stowed_short)
 def test_trapezoidal_rule_conserves_energy_through_a_whole_deployment(stowed_short):
     """rho_inf = 1 to lambda = 1: the short tape unwinds completely (measured: 1,094 steps,
     25 ms) and strain + contact + kinetic energy stay the stowed energy plus the release's
-    work to 2e-8 of it: no spurious growth, no numerical dissipation."""
-    config = short_stowed_config(t_end=0.1, rho_inf=1.0)
+    work to 2e-8 of it: no spurious growth, no numerical dissipation (Newton to 1e-8 of each
+    step's first residual, the balance's own tolerance)."""
+    config = short_stowed_config(t_end=0.1, rho_inf=1.0, rtol=1e-8)
     _, result = deploy(stowed_short, config)
     assert result.completed, result.message
     h = result.history

@@ -283,6 +283,10 @@ class DeploymentConfig:
             fraction of the step's own displacement; a step above it is repeated shorter, and
             the next step is sized to it. 0 leaves the steps to Newton alone (they grow after
             easy solves, up to max_dt).
+        rtol: relative residual tolerance of each time step's Newton iteration [-] (the static
+            phases take [solver] rtol): a step is accurate only to its own error in time, which
+            the last decades of the residual do not change; [solver] atol and max_newton hold
+            as well.
         release_time: time over which the hold on the free end (pull and guide) is released [s].
         rho_inf: high-frequency spectral radius of generalized-alpha [-]; 1 is trapezoidal Newmark.
         lambda_end: deployed fraction at which the run stops early [-].
@@ -301,12 +305,17 @@ class DeploymentConfig:
     dt: float = param(1e-4, "s", POSITIVE)
     max_dt: float = param(1e-3, "s", POSITIVE)
     error_tolerance: float = param(0.0, "-", Range(0.0, 1.0, False, True))
+    rtol: float = param(1e-5, "-", Range(0.0, 1.0, True, True))
     release_time: float = param(2e-3, "s", NON_NEGATIVE)
     rho_inf: float = param(0.5, "-", Range(0.0, 1.0))
     lambda_end: float = param(1.0, "-", Range(0.0, 1.0, True))
     hub: str = param("fixed", "", ("fixed", "free"))
     gravity: list = param([0.0, 0.0, 0.0], "m/s^2")
     petsc_options: dict = param({}, "")
+
+    def newton(self, solver: SolverConfig) -> SolverConfig:
+        """The solver settings of a time step: ``solver`` ([solver]) with this rtol."""
+        return dataclasses.replace(solver, rtol=self.rtol)
 
     def check(self) -> None:
         if self.dt >= self.t_end:

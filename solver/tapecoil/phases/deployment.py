@@ -100,7 +100,7 @@ class DeploymentProblem:
             J,
             model.q,
             self.bcs,
-            cfg.solver,
+            cfg.deployment.newton(cfg.solver),
             prefix="deploy_",
             defaults={**options, **self.tape.solver_options()},
             options=cfg.deployment.petsc_options,

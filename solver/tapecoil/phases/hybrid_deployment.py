@@ -354,7 +354,7 @@ class HybridDeployment:
             self.line_density,
             self.rotary_inertia,
             rho_inf=self.rho_inf,
-            settings=cfg.solver,
+            settings=cfg.deployment.newton(cfg.solver),
             options=self.options,
             loads=hold_loads if release else None,
             gravity=cfg.deployment.gravity,
