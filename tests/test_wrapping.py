@@ -190,10 +190,15 @@ def test_wrapping_options_are_checked_before_computing():
 
 @pytest.mark.mpi
 def test_wrapping_on_two_ranks_matches_one(loss_of_uniqueness):
+    """The wrapping on 2 ranks as on one: the same steps and folds, the tension and every
+    step's force to 1e-6 (of the largest force where a force passes through zero): each rank
+    count rounds the kernels' reassociated sums its own way (measured on DOLFINx 0.11: 1.6e-9
+    of the largest force)."""
     alone = _wrap(2.0, MPI.COMM_SELF)
     both = loss_of_uniqueness
     assert MPI.COMM_WORLD.size == 2
     assert both["steps"] == alone["steps"] and both["max_folds"] == alone["max_folds"]
     assert both["required_tension"] == pytest.approx(alone["required_tension"], rel=1e-6)
     forces = np.array([row["force"] for row in both["history"]])
-    assert forces == pytest.approx(np.array([row["force"] for row in alone["history"]]), rel=1e-6, abs=1e-8)
+    expected = np.array([row["force"] for row in alone["history"]])
+    assert forces == pytest.approx(expected, rel=1e-6, abs=1e-6 * np.abs(forces).max())
