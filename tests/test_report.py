@@ -54,6 +54,7 @@ FIGURES = (
     "deployment_lambda",
     "deployment_energies",
     "deployment_root_loads",
+    "deployment_coil",
     "deployment_hub",
 )
 RENDERS = ("coiling_sequence", "stowed", "deployment_sequence")

@@ -6,7 +6,8 @@ deploys the coarse benchmark from the coiling validation's stowed state
 (results/validate-coil-coarse, coiled first if it is not there) with the hub free to turn, of
 rotary inertia ``--inertia`` times the stowed tape's own (theory.stowed_rotary_inertia), into
 results/free-hub-J<inertia>, and prints the times and hub turns at
-lambda = 0.2 ... 0.9 against the model with the plate energy, and the angular momentum kept;
+lambda = 0.2 ... 0.9 against the model with the plate energy, how loose the coil came (its
+largest opening behind the lift-off and its loose turns beyond it), and the angular momentum kept;
 the hub's turn against lambda is drawn into free_hub.png there.
 """
 
@@ -84,6 +85,13 @@ def main() -> None:
         history[0]["lambda"],
         out / "free_hub.png",
         model_name(run),
+    )
+    looseness = summary["measures"]["coil_looseness"]
+    print(
+        f"the coil: opening behind the lift-off at most {looseness['largest_opening_h']:.2f} h "
+        f"(t {1e3 * looseness['opening_time']:.1f} ms, lambda {looseness['opening_lambda']:.3f}); "
+        f"at most {looseness['most_loose_turns']:.2f} loose turns beyond the lift-off "
+        f"(t {1e3 * looseness['loose_turns_time']:.1f} ms, lambda {looseness['loose_turns_lambda']:.3f})"
     )
     released = [r for r in history if r["time"] > 1.5 * config.deployment.release_time]
     H = np.array([r["angular_momentum"] for r in released])

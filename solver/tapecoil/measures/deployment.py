@@ -139,6 +139,7 @@ def deployment_measures(config, history: list[dict]) -> dict:
             extra={"lam": lam_end},
         ).to_dict(),
         **free_hub,
+        **looseness_peaks(history, tp.h),
         "time_to_0.9_eq_2_20": {
             "reference": theory.deployment_time(k_hub, 0.9),
             "source": "Eq. 2.20, r = r_hub, lambda0 = 0",
@@ -186,7 +187,8 @@ LIFT_OFF_GAP = 2.0
 
 
 def lift_off(tape, gap_factor: float = LIFT_OFF_GAP) -> dict[str, float]:
-    """The coiled length and the deployed fraction lambda (collective), in every phase.
+    """The coiled length, the deployed fraction lambda and how loose the coil is
+    (:func:`coil_looseness`) (collective), in every phase.
 
     The lift-off point is the last point of the centre line, counted from the root, whose
     inner face lies within ``gap_factor`` h of its obstacle (the turn beneath or the
@@ -206,16 +208,19 @@ def lift_off(tape, gap_factor: float = LIFT_OFF_GAP) -> dict[str, float]:
     nodes = c.nodes
     n_owned = nodes.space.dofmap.index_map.size_local
     q = tape.model.q.x.array
-    face = nodes.positions(q) + c.face_offset * nodes.directors(q)
+    positions = nodes.positions(q)
+    face = positions + c.face_offset * nodes.directors(q)
     obstacle = c.spiral_radius(c.psi.x.array)
     gap = c.polar(face)[0] - obstacle
+    radius, angle = c.polar(positions)
     xi = nodes.xi[:, :n_owned]
     centre = tape.centre_nodes()
-    columns = (xi[0], gap[:n_owned], obstacle[:n_owned])
+    columns = (xi[0], gap[:n_owned], obstacle[:n_owned], radius[:n_owned], angle[:n_owned])
     rows = np.vstack(tape.comm.allgather(np.column_stack([col[centre] for col in columns])))
-    s, g, r = rows[np.argsort(rows[:, 0])].T
+    s, g, r, radius, angle = rows[np.argsort(rows[:, 0])].T
     coiled = coiled_length(s, g, r, G)
-    return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L}
+    looseness = coil_looseness(s, radius, angle, coiled, tp.h)
+    return {"coiled_length": coiled, "lambda": 1.0 - coiled / tp.L, **looseness}
 
 
 def coiled_length(s: np.ndarray, g: np.ndarray, r: np.ndarray, G: float) -> float:
@@ -233,6 +238,77 @@ def coiled_length(s: np.ndarray, g: np.ndarray, r: np.ndarray, G: float) -> floa
         tangent = math.sqrt((r[i] + G) ** 2 - r[i] ** 2)
         coiled = max(float(s[i] + w * (s[i + 1] - s[i])) - tangent, 0.0)
     return coiled
+
+
+def coil_looseness(s: np.ndarray, radius: np.ndarray, angle: np.ndarray, coiled: float, h: float) -> dict:
+    """How loose the coil is, read from the centre line's geometry alone: its points in order
+    along the tape (material coordinates ``s`` [m], distances ``radius`` [m] from the hub's axis,
+    polar angles ``angle`` [rad] about it), ``coiled`` [m] the coiled length (:func:`lift_off`).
+
+    Each point's winding angle is its polar angle unwrapped along the tape from the root's, and
+    its gap is its distance from the axis less that of the centre line one turn less wound at the
+    same angle, less ``h``: 0 for a turn resting on the turn beneath, h for one lifted by a
+    thickness. Returns
+
+    - ``coil_opening`` [m], ``coil_opening_at`` [m along the tape]: the largest gap among the
+      points wound more than once round the hub and more than a quarter turn behind the
+      lift-off, and where: a coil that loosens inside itself opens there while its lift-off
+      stays put (0 at 0 with no such point). The last quarter turn is left out: there the
+      section's flattening lifts the tape off the coil gradually, by about h/2 at the lift-off
+      (the ploy region), whose lift is no loosening;
+    - ``loose_turns``: the turns the tape still winds round the hub beyond the lift-off, less the
+      quarter turn that a straight tape leaving the coil tangentially sweeps (it stays below a
+      quarter turn however long it is). A coil whose outer turns lift off together, as a
+      blossoming coil's do, counts them as off the coil (its lambda runs ahead), and they show
+      here as whole turns; a coil that pays out at its lift-off shows the ploy region's gradual
+      departure alone, a tenth of a turn or so.
+    """
+    if len(s) < 2:
+        return {"coil_opening": 0.0, "coil_opening_at": 0.0, "loose_turns": 0.0}
+    turned = np.abs(np.unwrap(angle) - angle[0])
+    wound = np.maximum.accumulate(turned)  # beyond the lift-off the straight tape turns back a little
+    beneath = np.interp(turned - 2 * math.pi, wound, radius, left=np.nan)
+    gap = radius - beneath - h
+    lift = float(np.interp(coiled, s, wound))  # the lift-off's winding angle
+    behind = (turned >= 2 * math.pi) & (turned <= lift - 0.5 * math.pi) & (s < coiled) & np.isfinite(gap)
+    opening, at = 0.0, 0.0
+    if behind.any():
+        widest = int(np.argmax(np.where(behind, gap, -np.inf)))
+        opening, at = float(gap[widest]), float(s[widest])
+    beyond = turned.max() - lift
+    return {
+        "coil_opening": opening,
+        "coil_opening_at": at,
+        "loose_turns": max(beyond - 0.5 * math.pi, 0.0) / (2 * math.pi),
+    }
+
+
+def looseness_peaks(history: list[dict], h: float) -> dict:
+    """The summary's ``coil_looseness``: the largest opening of the coil behind its lift-off (in
+    thicknesses h) and the most loose turns beyond it over the deployment's rows
+    (:func:`coil_looseness`), each with its time and lambda; none for a history written
+    without them."""
+    rows = [r for r in history if "coil_opening" in r]
+    if not rows:
+        return {}
+    widest = max(rows, key=lambda r: r["coil_opening"])
+    loosest = max(rows, key=lambda r: r["loose_turns"])
+    return {
+        "coil_looseness": {
+            "largest_opening_h": widest["coil_opening"] / h,
+            "opening_time": widest["time"],
+            "opening_lambda": widest["lambda"],
+            "opening_at": widest["coil_opening_at"],
+            "final_opening_h": rows[-1]["coil_opening"] / h,
+            "most_loose_turns": loosest["loose_turns"],
+            "loose_turns_time": loosest["time"],
+            "loose_turns_lambda": loosest["lambda"],
+            "definition": "read from the centre line's geometry: the largest gap between a turn and "
+            "the turn beneath it behind the lift-off, and the turns the tape still winds round the "
+            "hub beyond the lift-off less a straight tape's quarter turn (a coil that loosens or "
+            "blossoms shows in one or the other)",
+        }
+    }
 
 
 def root_load_peaks(history: list[dict], end_lambda: float = 0.9) -> dict:

@@ -88,6 +88,11 @@ class DeploymentRows:
             "rejected_steps": step.rejected if step else 0,
             "lambda": lift["lambda"],
             "coiled_length": lift["coiled_length"],
+            # how loose the coil is: the largest gap between a turn and the one beneath it behind
+            # the lift-off [m] and where [m], the turns still wound beyond the lift-off
+            "coil_opening": lift["coil_opening"],
+            "coil_opening_at": lift["coil_opening_at"],
+            "loose_turns": lift["loose_turns"],
             "kinetic_energy": e["kinetic"],
             "strain_energy": e["strain"],
             "membrane_energy": e["membrane"],

@@ -128,8 +128,10 @@ class DeploymentRecord:
     release [s], the angular momentum of the tape and a free hub about the hub's axis
     [kg m^2/s], the root's loads on the hub
     (:class:`~tapecoil.phases.root_loads.HybridRootLoads`: ``root_force_x`` ... ``root_torque``
-    [N], [N m]), and the hub's angle [rad], rate [rad/s] (coiling sense) and kinetic energy [J]
-    (a held hub's: its stowed angle, 0, 0)."""
+    [N], [N m]), the hub's angle [rad], rate [rad/s] (coiling sense) and kinetic energy [J]
+    (a held hub's: its stowed angle, 0, 0), and how loose the coil is: its opening behind the
+    lift-off and where [m], the loose turns beyond it
+    (:func:`~tapecoil.measures.deployment.coil_looseness`; 0 in records written before them)."""
 
     time: float
     step: float
@@ -149,6 +151,9 @@ class DeploymentRecord:
     hub_angle: float
     hub_rate: float
     hub_kinetic_energy: float
+    coil_opening: float = 0.0
+    coil_opening_at: float = 0.0
+    loose_turns: float = 0.0
 
     @property
     def energy(self) -> float:
@@ -505,6 +510,9 @@ class HybridDeployment:
             self.angle,
             0.0 if rotor is None else rotor.rate,
             hub_kinetic,
+            reading["coil_opening"],
+            reading["coil_opening_at"],
+            reading["loose_turns"],
         )
         self._start_energy = record.energy  # the next step's start
         return record

@@ -17,7 +17,7 @@ import ufl
 
 from tapecoil.core import jit
 from tapecoil.core.dofs import global_scalar, global_size
-from tapecoil.measures.deployment import LIFT_OFF_GAP, coiled_length
+from tapecoil.measures.deployment import LIFT_OFF_GAP, coil_looseness, coiled_length
 from tapecoil.phases.deployment_forms import director_rates
 from tapecoil.phases.hybrid_line import centre_line, winding_along
 from tapecoil.phases.release import split_state
@@ -25,12 +25,15 @@ from tapecoil.phases.release import split_state
 __all__ = ["HybridDeploymentMeasures", "coiled_along"]
 
 
-def coiled_along(hybrid, frame, hub_angle: float, tape) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+def coiled_along(
+    hybrid, frame, hub_angle: float, tape, line=None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Along ``hybrid``'s centre line: the places [m], the winding angles [rad], the inner face's
-    gaps to the spiral of turns [m], and the coiled length [m] (collective). ``frame``: the hub's
-    (:class:`~tapecoil.hub.frame.HubFrame`), at ``hub_angle`` [rad]; ``tape``: the
+    gaps to the spiral of turns [m], and the coiled length [m] (collective, or not with ``line``,
+    the centre line already read: :func:`~tapecoil.phases.hybrid_line.centre_line`). ``frame``:
+    the hub's (:class:`~tapecoil.hub.frame.HubFrame`), at ``hub_angle`` [rad]; ``tape``: the
     :class:`~tapecoil.config.TapeConfig`."""
-    x, points = centre_line(hybrid)
+    x, points = centre_line(hybrid) if line is None else line
     psi = winding_along(frame, hub_angle, points)
     obstacle = hybrid.shell.contact.spiral_radius(psi)
     gap = frame.polar(points.T)[0] - 0.5 * tape.h - obstacle
@@ -102,11 +105,15 @@ class HybridDeploymentMeasures:
         return global_scalar(self._shell_momentum, self.comm) + float(beam)
 
     def lift_off(self) -> dict[str, float]:
-        """The coiled length [m] and the deployed fraction lambda, and the flattened beam's
-        largest gap to its turn [m] within ``reach`` behind the window's start, and where [m]
-        (collective)."""
+        """The coiled length [m] and the deployed fraction lambda, the coil's opening behind the
+        lift-off and where [m] and the loose turns beyond it
+        (:func:`~tapecoil.measures.deployment.coil_looseness`), and the
+        flattened beam's largest gap to its turn [m] within ``reach`` behind the window's start,
+        and where [m] (collective)."""
         tp = self.tape
-        x, psi, gap, coiled = coiled_along(self.hybrid, self.frame, self.hub_angle, tp)
+        x, points = centre_line(self.hybrid)
+        x, psi, gap, coiled = coiled_along(self.hybrid, self.frame, self.hub_angle, tp, (x, points))
+        radius, angle = self.frame.polar(points.T)
         # the stretch of beam that the next moves place into shell, where it rests on a turn
         # (on the hub, by the root, the release lifts it by a few thicknesses: docs/notes/hybrid.md)
         start = self.window()[0]
@@ -115,6 +122,7 @@ class HybridDeploymentMeasures:
         return {
             "coiled_length": coiled,
             "lambda": 1.0 - coiled / tp.L,
+            **coil_looseness(x, radius, angle, coiled, tp.h),
             "beam_gap": float(gap[loosest]) if loosest is not None else 0.0,
             "beam_gap_at": float(x[loosest]) if loosest is not None else 0.0,
         }

@@ -129,6 +129,11 @@ class HybridDeploymentPhase(Phase):
             "rejected_steps": record.rejected_steps,
             "lambda": record.deployed,
             "coiled_length": record.coiled_length,
+            # how loose the coil is: its opening behind the lift-off [m] and where [m], the
+            # turns still wound beyond the lift-off
+            "coil_opening": record.coil_opening,
+            "coil_opening_at": record.coil_opening_at,
+            "loose_turns": record.loose_turns,
             # the hub: its angle [rad] and rate [rad/s] (coiling sense), its kinetic energy (in
             # kinetic_energy too), and the angular momentum of tape and hub about its axis
             "hub_angle": record.hub_angle,

@@ -322,6 +322,22 @@ def deployment_root_loads(directory: Path) -> Path | None:
     return _save(fig, figures / "deployment_root_loads.png")
 
 
+def deployment_coil(directory: Path) -> Path | None:
+    """How loose the coil is through the deployment: its opening behind the lift-off, in
+    thicknesses, and the turns still wound beyond the lift-off, against time."""
+    run = _deployment(directory, needs="loose_turns")
+    if run is None:
+        return None
+    h, config, _, figures = run
+    t = h["time"]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.4), sharex=True)
+    top.plot(t, h["coil_opening"] / config.tape.h)
+    top.set(ylabel="opening behind the lift-off [h]", title="how loose the coil is")
+    bottom.plot(t, h["loose_turns"])
+    bottom.set(xlabel="time [s]", ylabel="loose turns beyond the lift-off")
+    return _save(fig, figures / "deployment_coil.png")
+
+
 def free_hub_figure(h: dict[str, np.ndarray], config, lam0: float, path: Path, model: str) -> Path:
     """A free hub's turn against lambda, simulated (history ``h``, by the tape's ``model``: its
     :func:`model_name`) and by the free-hub model from ``lam0``, and its rate against time."""
@@ -394,6 +410,7 @@ FIGURES = (
     deployment_lambda,
     deployment_energies,
     deployment_root_loads,
+    deployment_coil,
     deployment_hub,
     payout_forces,
 )
