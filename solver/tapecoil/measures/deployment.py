@@ -307,9 +307,9 @@ def looseness_peaks(history: list[dict], h: float) -> dict:
             "loose_turns_time": loosest["time"],
             "loose_turns_lambda": loosest["lambda"],
             "definition": "read from the centre line's geometry: the largest gap between a turn and "
-            "the turn beneath it behind the lift-off, and the turns the tape still winds round the "
-            "hub beyond the lift-off less a straight tape's quarter turn (a coil that loosens or "
-            "blossoms shows in one or the other)",
+            "the turn beneath it more than a quarter turn behind the lift-off, and the turns the "
+            "tape still winds round the hub beyond the lift-off less a straight tape's quarter turn "
+            "(a coil that loosens or blossoms shows in one or the other)",
         }
     }
 
