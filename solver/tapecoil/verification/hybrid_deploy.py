@@ -35,6 +35,11 @@ TIME_TOLERANCE = 2e-2
 # (its peaks do not converge in the step: docs/notes/deployment.md). The tolerance is the times'
 IMPULSE_FRACTION = 0.9
 IMPULSE_TOLERANCE = 2e-2
+# [s] the release's wave: it opens the benchmark's coil by several thicknesses near the lift-off
+# for its first 10-20 ms (docs/notes/deployment.md, *How loose the coil is*); the coil's
+# looseness is read after it
+RELEASE_WAVE = 0.02
+SIDES = ("hybrid", "full_shell")
 
 
 def deploy_side_by_side(
@@ -44,7 +49,8 @@ def deploy_side_by_side(
     deployed to ``deployment.lambda_end`` by the hybrid and (``full_shell``), from the hybrid's
     coil settled in the full shell, by the full shell. Returns for each (``"hybrid"``,
     ``"full_shell"``) the times [s], deployed fractions, strain and kinetic energies [J], root
-    torques [N m], hub angles [rad] and angular momenta [kg m^2/s] of its steps (the hybrid's
+    torques [N m], hub angles [rad], angular momenta [kg m^2/s], the coil's openings [m] and
+    loose turns (:func:`~tapecoil.measures.deployment.coil_looseness`) of its steps (the hybrid's
     hub rates [rad/s] too), its DOFs, steps, Newton iterations and wall time [s] of the
     deployment; the hybrid's message if it stopped before ``lambda_end`` (its rows up to there
     kept), its coiling's wall time [s] and steps, its window moves (time, start, end), their
@@ -87,6 +93,8 @@ def deploy_side_by_side(
             "hub_angle": np.array([r.hub_angle for r in records]),
             "hub_rate": np.array([r.hub_rate for r in records]),
             "angular_momentum": np.array([r.angular_momentum for r in records]),
+            "coil_opening": np.array([r.coil_opening for r in records]),
+            "loose_turns": np.array([r.loose_turns for r in records]),
             "completed": outcome == "deployed",
             "stopped": stopped,
             "dofs": deployment.measures.dofs(),
@@ -125,6 +133,8 @@ def deploy_side_by_side(
         "root_torque": np.array([r["root_torque"] for r in rows]),
         "hub_angle": np.array([r["hub_angle"] for r in rows]),
         "angular_momentum": np.array([r["angular_momentum"] for r in rows]),
+        "coil_opening": np.array([r["coil_opening"] for r in rows]),
+        "loose_turns": np.array([r["loose_turns"] for r in rows]),
         "completed": result.completed,
         "dofs": global_size(full.model.W),
         "steps": len(rows) - 1,
@@ -153,10 +163,20 @@ def angular_impulse(side: dict, until: float) -> float:
     return float(np.sum(0.5 * (torques[1:] + torques[:-1]) * np.diff(times)))
 
 
+def looseness_after(side: dict, start: float, h: float) -> dict:
+    """A deployment's largest coil opening [h] and most loose turns from ``start`` [s] on."""
+    after = side["time"] >= start
+    return {
+        "largest_opening_h": float(side["coil_opening"][after].max() / h),
+        "most_loose_turns": float(side["loose_turns"][after].max()),
+    }
+
+
 def hybrid_deploy(config: Config, preset: str = "coarse", angle: float = DEPLOY_ANGLE, comm=MPI.COMM_WORLD):
     """``hybrid-deploy``: :func:`deploy_side_by_side` to ``angle`` [rad]: the hybrid's times to
     lambda = 0.5, 0.9 and 1 within TIME_TOLERANCE of the full shell's, both deployments
-    complete; DOFs, steps, Newton iterations and wall times in the info."""
+    complete; DOFs, steps, Newton iterations, wall times and how loose each coil came after the
+    release's wave (:func:`looseness_after`) in the info."""
     both = deploy_side_by_side(config, preset, angle, comm)
     hybrid, full = both["hybrid"], both["full_shell"]
     checks = [
@@ -194,13 +214,11 @@ def hybrid_deploy(config: Config, preset: str = "coarse", angle: float = DEPLOY_
                 "peak": float(np.abs(both[side]["root_torque"]).max()),
                 "at_release": float(both[side]["root_torque"][0]),
             }
-            for side, impulse in zip(("hybrid", "full_shell"), impulses, strict=True)
+            for side, impulse in zip(SIDES, impulses, strict=True)
         },
         "moves": both["moves"],
         "placed_settling": both["placed_settling"],
-        **{
-            side: {k: v for k, v in both[side].items() if not isinstance(v, np.ndarray)}
-            for side in ("hybrid", "full_shell")
-        },
+        "coil_looseness": {side: looseness_after(both[side], RELEASE_WAVE, config.tape.h) for side in SIDES},
+        **{side: {k: v for k, v in both[side].items() if not isinstance(v, np.ndarray)} for side in SIDES},
     }
     return CaseResult("hybrid-deploy", checks, info)
