@@ -156,7 +156,8 @@ def test_the_hybrid_deploys_the_benchmark_as_the_full_shell_does():
     assert result.info["hybrid"]["dofs"] < result.info["full_shell"]["dofs"]
     assert len(result.info["moves"]) > 3  # the window went down the coil
     # both coils stay tight after the release's wave, read from their centre lines' geometry:
-    # within a thickness behind the lift-off, paid out at it
+    # within a thickness behind the lift-off, paid out at it (measured: the hybrid 0.54 h and
+    # 0.056 loose turns, the full shell 0.70 h and 0.053)
     for side, looseness in result.info["coil_looseness"].items():
         assert looseness["largest_opening_h"] < 1.0, side
         assert looseness["most_loose_turns"] < 0.1, side
